@@ -1,0 +1,2 @@
+//! The `sheer` binary.
+fn main() {}

@@ -1,0 +1,401 @@
+//! Simulation parameters: plain, serialisable data in SI units.
+//!
+//! Everything a run needs besides the mesh lives in [`SimParams`], so a scene file can describe any run.
+//! Every field has a default (the waving-flag defaults), and [`SimParams::validate`] turns a bad value
+//! into a [`ParamError`] naming the field instead of letting it reach the integrator.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::ParamError;
+
+/// The time integrator, with its own knobs. All methods run behind the same
+/// [`Simulation::step`](crate::Simulation::step); `substeps` splits each `step(dt)` into equal sub-steps.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Method {
+    /// Forward Euler: `x' = x + h v`, `v' = v + h a(x, v)`. Unconditionally unstable without damping
+    /// (its amplification factor is `sqrt(1 + (ωh)²) > 1`); shipped as the baseline that fails.
+    ExplicitEuler { substeps: u32 },
+    /// Semi-implicit (symplectic) Euler: `v' = v + h a(x, v)`, `x' = x + h v'`. Stable for `h < 2/ω`.
+    SymplecticEuler { substeps: u32 },
+    /// Velocity Verlet (Swope et al. 1982), second order, symplectic. Stable for `h < 2/ω`.
+    Verlet { substeps: u32 },
+    /// Backward Euler linearised once per step and solved by preconditioned conjugate gradients
+    /// (Baraff & Witkin 1998, "Large steps in cloth simulation", eqs. (15)–(18)).
+    ImplicitEuler {
+        substeps: u32,
+        /// Upper bound on CG iterations per solve.
+        cg_max_iterations: u32,
+        /// Relative residual `|b − A Δv| / |b|` at which CG stops.
+        cg_tolerance: f64,
+    },
+    /// Position-based dynamics (Müller et al. 2007): dimensionless stiffness in (0, 1], corrected for
+    /// the iteration count by `1 − (1 − k)^(1/n)` (their section 3.3).
+    Pbd {
+        substeps: u32,
+        iterations: u32,
+        /// Dimensionless PBD stiffness in (0, 1]; the spring stiffnesses in N/m are not used.
+        stiffness: f64,
+    },
+    /// Extended PBD (Macklin, Müller, Chentanez 2016): compliance `α = 1/k` in m/N taken from the
+    /// springs, Lagrange multipliers reset every step, `iterations` Gauss–Seidel sweeps per step.
+    Xpbd { substeps: u32, iterations: u32 },
+    /// "Small steps" XPBD (Macklin et al. 2019): `substeps` sub-steps of one XPBD iteration each.
+    SmallStepsXpbd { substeps: u32 },
+}
+
+impl Method {
+    /// Sub-steps per call of `step(dt)`.
+    pub fn substeps(&self) -> u32 {
+        match *self {
+            Method::ExplicitEuler { substeps }
+            | Method::SymplecticEuler { substeps }
+            | Method::Verlet { substeps }
+            | Method::ImplicitEuler { substeps, .. }
+            | Method::Pbd { substeps, .. }
+            | Method::Xpbd { substeps, .. }
+            | Method::SmallStepsXpbd { substeps } => substeps,
+        }
+    }
+
+    /// Constraint-solver iterations per sub-step (1 for the force-based integrators).
+    pub fn iterations(&self) -> u32 {
+        match *self {
+            Method::Pbd { iterations, .. } | Method::Xpbd { iterations, .. } => iterations,
+            Method::ImplicitEuler {
+                cg_max_iterations, ..
+            } => cg_max_iterations,
+            _ => 1,
+        }
+    }
+
+    /// Short snake_case name, as used in scene files, CSV output and charts.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::ExplicitEuler { .. } => "explicit_euler",
+            Method::SymplecticEuler { .. } => "symplectic_euler",
+            Method::Verlet { .. } => "verlet",
+            Method::ImplicitEuler { .. } => "implicit_euler",
+            Method::Pbd { .. } => "pbd",
+            Method::Xpbd { .. } => "xpbd",
+            Method::SmallStepsXpbd { .. } => "small_steps_xpbd",
+        }
+    }
+
+    /// Every method with the given sub-step count and otherwise default knobs (for sweeps and benches).
+    pub fn all_with_substeps(substeps: u32, iterations: u32) -> [Method; 7] {
+        [
+            Method::ExplicitEuler { substeps },
+            Method::SymplecticEuler { substeps },
+            Method::Verlet { substeps },
+            Method::ImplicitEuler {
+                substeps,
+                cg_max_iterations: iterations.max(1) * 10,
+                cg_tolerance: 1e-6,
+            },
+            Method::Pbd {
+                substeps,
+                iterations,
+                stiffness: 1.0,
+            },
+            Method::Xpbd {
+                substeps,
+                iterations,
+            },
+            Method::SmallStepsXpbd { substeps },
+        ]
+    }
+
+    /// Parses a method name as printed by [`Method::name`], with the given knobs.
+    pub fn from_name(name: &str, substeps: u32, iterations: u32) -> Option<Method> {
+        Method::all_with_substeps(substeps, iterations)
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+
+    fn validate(&self) -> Result<(), ParamError> {
+        if self.substeps() == 0 {
+            return Err(ParamError::new("method.substeps", 0.0, "must be at least 1"));
+        }
+        match *self {
+            Method::ImplicitEuler {
+                cg_max_iterations,
+                cg_tolerance,
+                ..
+            } => {
+                if cg_max_iterations == 0 {
+                    return Err(ParamError::new(
+                        "method.cg_max_iterations",
+                        0.0,
+                        "must be at least 1",
+                    ));
+                }
+                positive("method.cg_tolerance", cg_tolerance)?;
+            }
+            Method::Pbd {
+                iterations,
+                stiffness,
+                ..
+            } => {
+                if iterations == 0 {
+                    return Err(ParamError::new("method.iterations", 0.0, "must be at least 1"));
+                }
+                if !(stiffness > 0.0 && stiffness <= 1.0) {
+                    return Err(ParamError::new(
+                        "method.stiffness",
+                        stiffness,
+                        "PBD stiffness must lie in (0, 1]",
+                    ));
+                }
+            }
+            Method::Xpbd { iterations, .. } if iterations == 0 => {
+                return Err(ParamError::new("method.iterations", 0.0, "must be at least 1"));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+impl Default for Method {
+    /// Small-steps XPBD with 20 sub-steps: the default flag's choice (see the crate README for the
+    /// measurements behind it).
+    fn default() -> Self {
+        Method::SmallStepsXpbd { substeps: 20 }
+    }
+}
+
+/// One family of springs (stretch, shear or bending): switchable, with its own stiffness and damping.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SpringParams {
+    /// Whether this family of springs exists in the model at all.
+    pub enabled: bool,
+    /// Hooke stiffness per spring, N/m. XPBD uses the compliance `1/stiffness` (m/N).
+    pub stiffness: f64,
+    /// Dashpot coefficient along the spring, N·s/m (XPBD: Macklin et al. 2016 eq. (26), `β = damping`).
+    pub damping: f64,
+}
+
+impl SpringParams {
+    /// An enabled family with the given stiffness (N/m) and damping (N·s/m).
+    pub fn new(stiffness: f64, damping: f64) -> Self {
+        SpringParams {
+            enabled: true,
+            stiffness,
+            damping,
+        }
+    }
+
+    /// A switched-off family.
+    pub fn disabled() -> Self {
+        SpringParams {
+            enabled: false,
+            ..SpringParams::default()
+        }
+    }
+
+    fn validate(&self, name: &'static str) -> Result<(), ParamError> {
+        if self.enabled {
+            positive(name, self.stiffness)?;
+            non_negative(name, self.damping)?;
+        }
+        Ok(())
+    }
+}
+
+impl Default for SpringParams {
+    fn default() -> Self {
+        SpringParams::new(100.0, 0.0)
+    }
+}
+
+/// Wind: a uniform air velocity with deterministic gusts, acting on every triangle through a flat-plate
+/// drag and lift model (Ling, Damodaran & Gay 1996, "Aerodynamic force models for animating cloth
+/// motion in air flow").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Wind {
+    /// Mean air velocity, m/s.
+    pub velocity: DVec3,
+    /// Air density, kg/m³ (1.225 at sea level, 15 °C).
+    pub air_density: f64,
+    /// Drag coefficient of a flat plate normal to the flow (dimensionless; about 1.2 for a square plate).
+    pub drag_coefficient: f64,
+    /// Lift coefficient (dimensionless); 0 switches lift off.
+    pub lift_coefficient: f64,
+    /// Gust amplitude as a fraction of the mean speed along the wind; 0 switches gusts off.
+    pub gust_strength: f64,
+    /// Lateral turbulence amplitude as a fraction of the mean speed; 0 switches it off.
+    pub turbulence: f64,
+    /// Typical gust frequency, Hz.
+    pub gust_frequency: f64,
+    /// Seed of the gust signal: the same seed gives the same gusts, bit for bit.
+    pub seed: u64,
+    /// Re-evaluate the aerodynamic forces every sub-step (default) instead of once per `step`, held over
+    /// its sub-steps. Held forces cost a twentieth but treat drag explicitly over the whole frame: its
+    /// rate `ρ C_D |u| / (2 × areal density)` times the frame time must stay well below 2, which fails
+    /// for light fabric in strong wind (0.1 kg/m² at 8 m/s diverges at 60 Hz; tested).
+    pub per_substep: bool,
+}
+
+impl Default for Wind {
+    fn default() -> Self {
+        Wind {
+            velocity: DVec3::new(0.0, 0.0, 0.0),
+            air_density: 1.225,
+            drag_coefficient: 1.2,
+            lift_coefficient: 0.4,
+            gust_strength: 0.3,
+            turbulence: 0.15,
+            gust_frequency: 0.5,
+            seed: 1,
+            per_substep: true,
+        }
+    }
+}
+
+impl Wind {
+    /// Whether the wind can exert any force (a zero mean velocity with no gusts does nothing).
+    pub fn is_active(&self) -> bool {
+        self.velocity != DVec3::ZERO && (self.drag_coefficient != 0.0 || self.lift_coefficient != 0.0)
+    }
+
+    fn validate(&self) -> Result<(), ParamError> {
+        finite_vec("wind.velocity", self.velocity)?;
+        non_negative("wind.air_density", self.air_density)?;
+        non_negative("wind.drag_coefficient", self.drag_coefficient)?;
+        non_negative("wind.lift_coefficient", self.lift_coefficient)?;
+        non_negative("wind.gust_strength", self.gust_strength)?;
+        non_negative("wind.turbulence", self.turbulence)?;
+        positive("wind.gust_frequency", self.gust_frequency)?;
+        Ok(())
+    }
+}
+
+/// When a step counts as diverged. A diverged step is undone and reported as
+/// [`StepError::Diverged`](crate::StepError::Diverged).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DivergenceLimits {
+    /// Largest particle speed still believed, m/s.
+    pub max_speed: f64,
+    /// Largest spring strain `length/rest − 1` still believed (dimensionless).
+    pub max_strain: f64,
+}
+
+impl Default for DivergenceLimits {
+    fn default() -> Self {
+        // A flag in a 30 m/s gale whips its fly end at a few tens of m/s; real fabric breaks long before
+        // it stretches to 11 times its length. Anything beyond is numerical runaway.
+        DivergenceLimits {
+            max_speed: 200.0,
+            max_strain: 10.0,
+        }
+    }
+}
+
+/// All parameters of a run besides the mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimParams {
+    pub method: Method,
+    /// Springs along the mesh edges (grid rows and columns).
+    pub stretch: SpringParams,
+    /// Springs across grid cell diagonals (grids only; a triangle mesh's edges already resist shear).
+    pub shear: SpringParams,
+    /// Springs skipping one particle (grids) or joining the far corners of adjacent triangles (meshes).
+    pub bend: SpringParams,
+    /// Gravitational acceleration, m/s².
+    pub gravity: DVec3,
+    /// Linear air damping of absolute velocity, 1/s (`f = −m c v`).
+    pub air_damping: f64,
+    pub wind: Wind,
+    /// Position-based methods only: long-range attachments (Kim, Chentanez & Müller 2012, "Long Range
+    /// Attachments — A Method to Simulate Inextensible Clothing in Computer Games"). Each free particle
+    /// may not move further from its nearest pinned particle than at rest. Gauss–Seidel needs about as many
+    /// sweeps as the cloth is particles long to carry a load from the pole to the fly end; the tethers
+    /// carry it in one, so a hanging flag does not stretch like rubber at 20 sweeps per frame.
+    pub long_range_attachments: bool,
+    pub divergence: DivergenceLimits,
+    /// Below this many particles every pass runs on one thread: rayon's fork–join costs more than it
+    /// saves on small cloths (see the crate README for the measurement). Results are bit-identical either
+    /// way.
+    pub parallel_min_particles: usize,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            method: Method::default(),
+            stretch: SpringParams::new(1000.0, 0.01),
+            shear: SpringParams::new(100.0, 0.002),
+            bend: SpringParams::new(5.0, 0.0005),
+            gravity: DVec3::new(0.0, -9.81, 0.0),
+            air_damping: 0.05,
+            wind: Wind::default(),
+            long_range_attachments: true,
+            divergence: DivergenceLimits::default(),
+            parallel_min_particles: 16_384,
+        }
+    }
+}
+
+impl SimParams {
+    /// Parameters with every force switched off except the springs (for tests of internal dynamics).
+    pub fn springs_only(method: Method, stretch: SpringParams) -> Self {
+        SimParams {
+            method,
+            stretch,
+            shear: SpringParams::disabled(),
+            bend: SpringParams::disabled(),
+            gravity: DVec3::ZERO,
+            air_damping: 0.0,
+            wind: Wind {
+                velocity: DVec3::ZERO,
+                ..Wind::default()
+            },
+            ..SimParams::default()
+        }
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        self.method.validate()?;
+        self.stretch.validate("stretch")?;
+        self.shear.validate("shear")?;
+        self.bend.validate("bend")?;
+        finite_vec("gravity", self.gravity)?;
+        non_negative("air_damping", self.air_damping)?;
+        self.wind.validate()?;
+        positive("divergence.max_speed", self.divergence.max_speed)?;
+        positive("divergence.max_strain", self.divergence.max_strain)?;
+        Ok(())
+    }
+}
+
+fn positive(name: &'static str, value: f64) -> Result<(), ParamError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(ParamError::new(name, value, "must be finite and > 0"))
+    }
+}
+
+fn non_negative(name: &'static str, value: f64) -> Result<(), ParamError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(ParamError::new(name, value, "must be finite and ≥ 0"))
+    }
+}
+
+fn finite_vec(name: &'static str, value: DVec3) -> Result<(), ParamError> {
+    for component in value.to_array() {
+        if !component.is_finite() {
+            return Err(ParamError::new(name, component, "must be finite"));
+        }
+    }
+    Ok(())
+}

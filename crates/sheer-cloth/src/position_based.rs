@@ -1,0 +1,224 @@
+//! Position-based integrators: PBD (Müller, Heidelberger, Hennix & Ratcliff 2007), XPBD (Macklin,
+//! Müller & Chentanez 2016) and small-steps XPBD (Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke &
+//! Müller 2019) — one loop, three settings.
+//!
+//! Per sub-step: external forces into velocities, predict positions, project the distance constraints
+//! colour batch by colour batch (Gauss–Seidel across batches, independent within a batch, so a batch
+//! can run in parallel with the same result), then velocities from the position change.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::parallel::{DisjointSlice, fill};
+use crate::sim::{Simulation, family_index};
+
+/// Batches smaller than this run on one thread even in parallel mode: rayon's fork–join costs more.
+const MIN_PARALLEL_BATCH: usize = 2048;
+
+impl Simulation {
+    /// One sub-step of length `h` at time `t`. `pbd_stiffness` selects PBD with that dimensionless
+    /// stiffness; `None` selects XPBD with compliance `1/k` from the springs.
+    pub(crate) fn position_based_substep(
+        &mut self,
+        h: f64,
+        t: f64,
+        iterations: u32,
+        pbd_stiffness: Option<f64>,
+    ) {
+        self.compute_forces(t, false);
+        let parallel = self.parallel();
+        {
+            let Simulation {
+                positions,
+                velocities,
+                previous_positions,
+                forces,
+                inverse_masses,
+                ..
+            } = self;
+            let update = |i: usize, x: &mut DVec3, v: &mut DVec3, previous: &mut DVec3| {
+                *v += h * inverse_masses[i] * forces[i];
+                *previous = *x;
+                *x += h * *v;
+            };
+            if parallel {
+                positions
+                    .par_iter_mut()
+                    .zip(velocities.par_iter_mut())
+                    .zip(previous_positions.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(i, ((x, v), p))| update(i, x, v, p));
+            } else {
+                for (i, ((x, v), p)) in positions
+                    .iter_mut()
+                    .zip(velocities.iter_mut())
+                    .zip(previous_positions.iter_mut())
+                    .enumerate()
+                {
+                    update(i, x, v, p);
+                }
+            }
+        }
+        self.lambdas.fill(0.0);
+        // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
+        // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
+        let stretch_stiffness = self.family[0].0;
+        let pbd_family: [f64; 3] = std::array::from_fn(|f| match pbd_stiffness {
+            Some(k) if self.family[f].0 > 0.0 => {
+                let relative = if stretch_stiffness > 0.0 {
+                    (self.family[f].0 / stretch_stiffness).min(1.0)
+                } else {
+                    1.0
+                };
+                1.0 - (1.0 - k * relative).powf(1.0 / iterations as f64)
+            }
+            _ => 0.0,
+        });
+        // Per-family constants of this sub-step. XPBD, Macklin et al. 2016 eqs. (18) and (26):
+        // α̃ = α/h², γ = α β / h with α = 1/k (m/N) and β = c (N·s/m). PBD: the correction is scaled by k'.
+        let constants: [(f64, f64, f64); 3] = std::array::from_fn(|f| {
+            let (stiffness, damping) = self.family[f];
+            if stiffness == 0.0 {
+                (0.0, 0.0, 0.0)
+            } else if pbd_stiffness.is_some() {
+                (pbd_family[f], 0.0, 0.0)
+            } else {
+                let compliance = 1.0 / stiffness;
+                (1.0, compliance / (h * h), compliance * damping / h)
+            }
+        });
+        let is_pbd = pbd_stiffness.is_some();
+        // The divisor of each constraint's update depends only on h, the parameters and the masses, so
+        // it is inverted once and reused until one of them changes: the inner loop then has a single
+        // division and a single square root, which bound its throughput.
+        let key = (h, constants, is_pbd);
+        if self.denominator_key != Some(key) {
+            let Simulation {
+                springs,
+                inverse_masses,
+                inverse_denominators,
+                ..
+            } = self;
+            inverse_denominators.resize(springs.len(), 0.0);
+            fill(inverse_denominators, parallel, |c| {
+                let sp = &springs[c];
+                let (scale, scaled_compliance, gamma) = constants[family_index(sp.kind)];
+                let w = inverse_masses[sp.a as usize] + inverse_masses[sp.b as usize];
+                if scale == 0.0 || w == 0.0 {
+                    0.0
+                } else if is_pbd {
+                    scale / w
+                } else {
+                    1.0 / ((1.0 + gamma) * w + scaled_compliance)
+                }
+            });
+            self.denominator_key = Some(key);
+        }
+        let Simulation {
+            positions,
+            previous_positions,
+            inverse_masses,
+            springs,
+            colours,
+            uncoloured,
+            lambdas,
+            inverse_denominators,
+            tethers,
+            pinned_indices,
+            params,
+            ..
+        } = self;
+        let long_range_attachments = params.long_range_attachments && !pinned_indices.is_empty();
+        let positions = DisjointSlice::new(positions);
+        let lambdas = DisjointSlice::new(lambdas);
+        let previous = &previous_positions[..];
+        let inverse_denominators = &inverse_denominators[..];
+        let solve = |c: usize| {
+            let inverse_denominator = inverse_denominators[c];
+            if inverse_denominator == 0.0 {
+                return; // switched-off family or both ends pinned
+            }
+            let sp = &springs[c];
+            let (a, b) = (sp.a as usize, sp.b as usize);
+            // SAFETY: the colouring puts no two springs sharing a particle in one batch, and each spring
+            // owns its multiplier, so no index is touched by two threads at once.
+            let (xa, xb) = unsafe { (positions.get(a), positions.get(b)) };
+            let delta = xa - xb;
+            let length = delta.length();
+            if length == 0.0 {
+                return; // coincident ends: no gradient direction
+            }
+            let gradient = delta * (1.0 / length);
+            let constraint = length - sp.rest_length;
+            let correction = if is_pbd {
+                -constraint * inverse_denominator
+            } else {
+                let (_, scaled_compliance, gamma) = constants[family_index(sp.kind)];
+                let rate = gradient.dot((xa - previous[a]) - (xb - previous[b]));
+                // SAFETY: see above.
+                let lambda = unsafe { lambdas.get(c) };
+                let delta_lambda =
+                    (-constraint - scaled_compliance * lambda - gamma * rate) * inverse_denominator;
+                unsafe { lambdas.set(c, lambda + delta_lambda) };
+                delta_lambda
+            };
+            let (wa, wb) = (inverse_masses[a], inverse_masses[b]);
+            // SAFETY: see above.
+            unsafe {
+                positions.set(a, xa + wa * correction * gradient);
+                positions.set(b, xb - wb * correction * gradient);
+            }
+        };
+        for _ in 0..iterations {
+            for range in colours.iter() {
+                if parallel && range.len() >= MIN_PARALLEL_BATCH {
+                    range.clone().into_par_iter().with_min_len(256).for_each(solve);
+                } else {
+                    range.clone().for_each(solve);
+                }
+            }
+            uncoloured.clone().for_each(solve);
+            if long_range_attachments {
+                // Each tether moves only its own free particle towards a pinned one: independent.
+                let tether = |i: usize| {
+                    if let Some((k, rest)) = tethers[i] {
+                        let anchor_index = pinned_indices[k as usize] as usize;
+                        // SAFETY: tether i writes only particle i, and reads a pinned particle, which
+                        // no tether writes.
+                        let (x, anchor) = unsafe { (positions.get(i), positions.get(anchor_index)) };
+                        let offset = x - anchor;
+                        let distance = offset.length();
+                        if distance > rest {
+                            unsafe { positions.set(i, anchor + offset * (rest / distance)) };
+                        }
+                    }
+                };
+                if parallel {
+                    (0..tethers.len()).into_par_iter().with_min_len(1024).for_each(tether);
+                } else {
+                    (0..tethers.len()).for_each(tether);
+                }
+            }
+        }
+        let Simulation {
+            positions,
+            velocities,
+            previous_positions,
+            ..
+        } = self;
+        let inverse_h = 1.0 / h;
+        let previous = &previous_positions[..];
+        if parallel {
+            velocities
+                .par_iter_mut()
+                .zip(positions.par_iter())
+                .enumerate()
+                .for_each(|(i, (v, x))| *v = (*x - previous[i]) * inverse_h);
+        } else {
+            for (i, (v, x)) in velocities.iter_mut().zip(positions.iter()).enumerate() {
+                *v = (*x - previous[i]) * inverse_h;
+            }
+        }
+        self.cached_forces_valid = false;
+    }
+}

@@ -1,0 +1,97 @@
+//! The per-fragment lit-side rule: which of the paper's rendering equations (7) or (8) applies at a
+//! fragment, with the cosines μ0 and μ it needs — in Rust here and, identically, in WGSL
+//! ([`LIT_SIDE_WGSL`], the file `shaders/lit_side.wgsl`).
+//!
+//! Frisvad, Christensen & Falster (2005), §3–4: the surface normal n is "always turned outwards such
+//! that μ0 = cos θ0 > 0", i.e. toward the light. Then, with ω the unit direction toward the eye,
+//! - n · ω > 0: the eye is on the lit side, the surface is front-lit: eq. (7) with the single
+//!   scattering term L+ of eq. (4), μ = n · ω;
+//! - n · ω < 0: the eye is on the far side, the surface is back-lit: eq. (8) with L− of eq. (5),
+//!   μ = −n · ω (the cosine with the eye's side of the slab).
+//!
+//! Interpolated normals and the terminator: vertex normals come from [`crate::NormalUpdater`] turned
+//! toward the light at each vertex, so along an edge whose two ends saw the light on different
+//! geometric sides, the interpolated normal swings through (nearly) perpendicular to the light.
+//! The rule therefore turns the *interpolated* normal toward the light again at the fragment.
+//! Consequences, tested in `tests/lit_side.rs`:
+//! - μ0 ≥ 0 at every fragment, and it tends to 0 continuously from both sides of the point where the
+//!   interpolated normal is perpendicular to the light — where eq. (4) and (5) both vanish
+//!   (E ∝ μ0 by eq. 6), so the diffuse term is continuous there;
+//! - at that point the flip changes which side the eye is on, so eq. (7)/(8) swap, but μ = |n · ω|
+//!   is continuous and the direct transmission e^{−τ1/μ} is the same in both equations;
+//! - a fragment whose interpolated normal is exactly zero (two opposite vertex normals, halfway)
+//!   has no defined orientation: it gets μ0 = 0, μ = 0, eye on the lit side — "grazing": no
+//!   single-scattered light (μ0 = 0) and no direct transmission (e^{−τ1/μ} → 0).
+//!
+//! Ties: n · ω0′ = 0 keeps n (μ0 = 0 either way); n · ω = 0 (eye grazing) counts as the lit side,
+//! eq. (7), with μ = 0. A zero `to_light` (light at the fragment) gives μ0 = 0; a zero `to_eye`
+//! (eye at the fragment) gives μ = 0.
+
+use glam::{Vec3, Vec3A};
+
+use crate::error::NormalsError;
+use crate::vector::unit_or_none;
+
+/// The WGSL source of the same rule, `fn lit_side_cosines(normal, to_light, to_eye) -> LitSide`, to
+/// be prepended to a shader's own source. It declares only `struct LitSide`, `fn lit_side_unit` and
+/// `fn lit_side_cosines`: no entry points, no bindings.
+pub const LIT_SIDE_WGSL: &str = include_str!("../../../shaders/lit_side.wgsl");
+
+/// The cosines of one fragment and which equation of the paper applies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LitSide {
+    /// μ0 = cos θ0 = n · ω0′ ≥ 0 with n turned toward the light (eq. 4–6); in [0, 1] up to a few
+    /// ulps of rounding.
+    pub mu0: f32,
+    /// μ = |n · ω| ≥ 0, the cosine between the normal and the eye direction on the eye's side of
+    /// the slab (already negated for the back-lit case, as eq. 8 with eq. 5 needs it).
+    pub mu: f32,
+    /// `true`: eye on the lit side, front-lit, evaluate eq. (7) with L+ of eq. (4).
+    /// `false`: eye on the far side, back-lit, evaluate eq. (8) with L− of eq. (5).
+    pub eye_on_lit_side: bool,
+}
+
+/// The lit-side rule at one fragment. `normal` is the interpolated vertex normal (any length, any
+/// sign), `to_light` the vector from the fragment toward the light (ω0′ up to length) and `to_eye`
+/// the vector from the fragment toward the eye (ω up to length); none needs to be unit length.
+///
+/// Errors: [`NormalsError::NonFiniteVector`] if any component is NaN or infinite. Zero vectors are
+/// defined cases (see the module documentation).
+pub fn lit_side_cosines(
+    normal: Vec3,
+    to_light: Vec3,
+    to_eye: Vec3,
+) -> Result<LitSide, NormalsError> {
+    for (what, v) in [
+        ("normal", normal),
+        ("to_light", to_light),
+        ("to_eye", to_eye),
+    ] {
+        if !v.is_finite() {
+            return Err(NormalsError::NonFiniteVector { what });
+        }
+    }
+    let light = unit_or_none(to_light.into()).unwrap_or(Vec3A::ZERO);
+    let eye = unit_or_none(to_eye.into()).unwrap_or(Vec3A::ZERO);
+    let Some(normal) = unit_or_none(normal.into()) else {
+        return Ok(LitSide {
+            mu0: 0.0,
+            mu: 0.0,
+            eye_on_lit_side: true,
+        });
+    };
+    // Re-orient at the fragment: interpolation may have carried the normal past the terminator.
+    let normal = if normal.dot(light) < 0.0 {
+        -normal
+    } else {
+        normal
+    };
+    // After the flip the dot is ≥ 0 or −0; abs only turns −0 into +0.
+    let mu0 = normal.dot(light).abs();
+    let signed_mu = normal.dot(eye);
+    Ok(LitSide {
+        mu0,
+        mu: signed_mu.abs(),
+        eye_on_lit_side: signed_mu >= 0.0,
+    })
+}

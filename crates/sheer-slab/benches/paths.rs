@@ -1,0 +1,169 @@
+//! Frames per second at 512×512 for the three thin-slab evaluation paths and the baseline (Frisvad et al.
+//! 2005 §4: fragment 300 fps, vertex 480 fps, CPU 190 fps on a 2005 laptop GPU), in one run on whatever
+//! adapter `HeadlessRenderer` picks (lavapipe on a machine without a GPU). A frame = back-to-front sort,
+//! uploads (and the rayon per-vertex evaluation on the CPU path), background + slab draw, and waiting for
+//! the GPU; no read-back. Criterion measures each path; then an interleaved run prints fps and the ratio
+//! of each path's frame time to the baseline's.
+//!
+//! `cargo bench -p sheer-slab --bench paths`
+
+use std::time::{Duration, Instant};
+
+use criterion::Criterion;
+use glam::Vec3;
+use sheer_slab::render::{
+    Background, Camera, EvaluationPath, HeadlessRenderer, ShadingParams, SlabMesh, Texture2d,
+};
+
+const SIZE: u32 = 512;
+
+/// A waving flag, 64×40 quads (5120 triangles), normals turned toward the light.
+fn waving_flag(light: Vec3) -> SlabMesh {
+    let (columns, rows) = (64u32, 40u32);
+    let mut mesh = SlabMesh::flat_sheet(
+        Vec3::new(-0.75, -0.45, 0.0),
+        Vec3::X * 1.5,
+        Vec3::Y * 0.9,
+        Vec3::Z,
+        columns,
+        rows,
+    )
+    .expect("valid sheet");
+    for (position, normal) in mesh.positions.iter_mut().zip(mesh.normals.iter_mut()) {
+        let x = position[0];
+        // z = a·sin(kx + φ(y)): the wave folds the flag toward and away from the camera.
+        let (amplitude, wavenumber) = (0.12, 7.0);
+        let phase = 1.5 * position[1];
+        position[2] = amplitude * (wavenumber * x + phase).sin();
+        let slope_x = amplitude * wavenumber * (wavenumber * x + phase).cos();
+        let slope_y = amplitude * 1.5 * (wavenumber * x + phase).cos();
+        let mut n = Vec3::new(-slope_x, -slope_y, 1.0).normalize();
+        if n.dot(light - Vec3::from(*position)) < 0.0 {
+            n = -n;
+        }
+        *normal = n.to_array();
+    }
+    mesh
+}
+
+struct Scene {
+    mesh: SlabMesh,
+    camera: Camera,
+    shading: ShadingParams,
+    background: Background,
+}
+
+fn scene() -> Scene {
+    let light = Vec3::new(0.8, 0.6, 1.5);
+    let albedo = Texture2d::new(
+        8,
+        8,
+        (0..64)
+            .map(|i| {
+                if (i / 8) % 4 == 1 || (i % 8) % 4 == 1 {
+                    [0.1, 0.2, 0.9, 1.0]
+                } else {
+                    [0.9, 0.9, 0.9, 1.0]
+                }
+            })
+            .collect(),
+    )
+    .expect("valid texture");
+    let mut shading = ShadingParams::uniform(2.0, 1.0, light, 60.0).expect("valid parameters");
+    shading.albedo_texture = albedo;
+    let background_texels = (0..SIZE * SIZE)
+        .map(|i| {
+            let (x, y) = (
+                (i % SIZE) as f32 / SIZE as f32,
+                (i / SIZE) as f32 / SIZE as f32,
+            );
+            [0.1 + 0.2 * x, 0.15, 0.1 + 0.3 * y, 1.0]
+        })
+        .collect();
+    Scene {
+        mesh: waving_flag(light),
+        camera: Camera {
+            eye: Vec3::new(0.2, 0.1, 1.6),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            vertical_fov: 0.9,
+            near: 0.05,
+            far: 10.0,
+        },
+        shading,
+        background: Background::Image(
+            Texture2d::new(SIZE, SIZE, background_texels).expect("valid image"),
+        ),
+    }
+}
+
+fn frame(renderer: &mut HeadlessRenderer, scene: &Scene, path: EvaluationPath) {
+    renderer
+        .render_frame(
+            &scene.mesh,
+            &scene.camera,
+            &scene.shading,
+            &scene.background,
+            path,
+        )
+        .expect("frame renders");
+}
+
+fn main() {
+    let mut renderer = HeadlessRenderer::new(SIZE, SIZE).expect("an adapter (lavapipe or a GPU)");
+    println!("adapter: {}", renderer.adapter_description());
+    let scene = scene();
+    for path in EvaluationPath::ALL {
+        frame(&mut renderer, &scene, path); // compile pipelines outside the measurement
+    }
+
+    let mut criterion = Criterion::default()
+        .sample_size(20)
+        .measurement_time(Duration::from_secs(4))
+        .configure_from_args();
+    {
+        let mut group = criterion.benchmark_group("frame_512x512");
+        for path in EvaluationPath::ALL {
+            group.bench_function(path.name(), |b| {
+                b.iter(|| frame(&mut renderer, &scene, path))
+            });
+        }
+        group.finish();
+    }
+    criterion.final_summary();
+
+    // Interleaved rounds so that drift of the machine affects every path alike.
+    let rounds = 12;
+    let frames_per_round = 10;
+    let mut seconds = [0.0f64; 4];
+    for _ in 0..rounds {
+        for (slot, path) in EvaluationPath::ALL.into_iter().enumerate() {
+            let start = Instant::now();
+            for _ in 0..frames_per_round {
+                frame(&mut renderer, &scene, path);
+            }
+            seconds[slot] += start.elapsed().as_secs_f64();
+        }
+    }
+    let frames = f64::from(rounds * frames_per_round);
+    let baseline = seconds[3] / frames;
+    println!(
+        "\n512x512, {} triangles, {} frames per path, interleaved",
+        scene.mesh.indices.len() / 3,
+        frames
+    );
+    println!("| path | ms/frame | fps | frame time / baseline | paper fps |");
+    println!("|---|---|---|---|---|");
+    let paper = ["300", "480", "190", "-"];
+    for (slot, path) in EvaluationPath::ALL.into_iter().enumerate() {
+        let per_frame = seconds[slot] / frames;
+        println!(
+            "| {} | {:.2} | {:.1} | {:.3} | {} |",
+            path.name(),
+            1e3 * per_frame,
+            1.0 / per_frame,
+            per_frame / baseline,
+            paper[slot]
+        );
+    }
+}

@@ -1,0 +1,272 @@
+//! CPU-side work of the renderer: the per-vertex "on the CPU" evaluation path (rayon, `f64` model of
+//! [`crate::model`]), the lit-side rule it shares with `shaders/lit_side.wgsl`, back-to-front triangle
+//! sorting, and half-float texture quantisation shared by upload and CPU sampling.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use super::scene::{ShadingParams, SlabMesh, Texture2d};
+use crate::model::{
+    Albedo, Cosine, OpticalThickness, direct_transmission, single_scattered_reflected_radiance,
+    single_scattered_transmitted_radiance,
+};
+
+/// Cosines below this are evaluated at this value, as in `shaders/thin_slab.wgsl` (grazing guard).
+pub const COSINE_FLOOR: f64 = 1e-6;
+
+/// Per-vertex output of the CPU path, uploaded as vertex attributes.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct VertexSlab {
+    /// L± for Λ = 1 (W/(m²·sr)) per channel.
+    pub radiance_per_albedo: [f32; 3],
+    /// α = e^{−τ1/μ} per channel.
+    pub transmittance: [f32; 3],
+}
+
+/// The lit-side rule (Frisvad et al. 2005 §4; identical to `shaders/lit_side.wgsl`): turn the normal toward
+/// the light, μ0 = n·l, μ = |n·e|, eye on the lit side iff n·e ≥ 0. Returns `(μ0, μ, eye_on_lit_side)`;
+/// a zero normal gives (0, 0, true).
+pub fn lit_side_cosines(normal: DVec3, to_light: DVec3, to_eye: DVec3) -> (f64, f64, bool) {
+    let light = to_light.normalize_or_zero();
+    let eye = to_eye.normalize_or_zero();
+    let mut n = normal.normalize_or_zero();
+    if n == DVec3::ZERO {
+        return (0.0, 0.0, true);
+    }
+    if n.dot(light) < 0.0 {
+        n = -n;
+    }
+    let signed_mu = n.dot(eye);
+    (n.dot(light).abs(), signed_mu.abs(), signed_mu >= 0.0)
+}
+
+/// The model at one surface point for Λ = 1: L± (W/(m²·sr)) and α per channel, with the same geometric
+/// guards as the shader (μ0 ≤ 0: no light; cosines floored at [`COSINE_FLOOR`] and capped at 1 against
+/// rounding). `tau` per channel must be > 0 and finite (validated by [`ShadingParams::validate`]).
+pub fn slab_values_at(
+    position: DVec3,
+    normal: DVec3,
+    tau: [f64; 3],
+    eye: DVec3,
+    params: &ShadingParams,
+) -> ([f64; 3], [f64; 3]) {
+    let to_light = params.light_position.as_dvec3() - position;
+    let (mu0, mu, lit) = lit_side_cosines(normal, to_light, eye - position);
+    let unit = Albedo::new(1.0).expect("1 is a valid albedo");
+    let cos_mu = Cosine::new("mu", mu.clamp(COSINE_FLOOR, 1.0)).expect("clamped into (0, 1]");
+    let mut radiance = [0.0; 3];
+    let mut transmittance = [0.0; 3];
+    for channel in 0..3 {
+        let Ok(optical_thickness) = OpticalThickness::new(tau[channel]) else {
+            // Unreachable for validated parameters; an opaque black slab is the safe reading.
+            continue;
+        };
+        transmittance[channel] = direct_transmission(optical_thickness, cos_mu);
+        if mu0 <= 0.0 {
+            continue;
+        }
+        let cos_mu0 =
+            Cosine::new("mu0", mu0.clamp(COSINE_FLOOR, 1.0)).expect("clamped into (0, 1]");
+        let irradiance = params.convention.inserted_irradiance(
+            f64::from(params.light_flux) / (4.0 * std::f64::consts::PI * to_light.length_squared()),
+            cos_mu0,
+        );
+        let per_unit = if lit {
+            single_scattered_reflected_radiance(optical_thickness, unit, cos_mu0, cos_mu)
+        } else {
+            single_scattered_transmitted_radiance(optical_thickness, unit, cos_mu0, cos_mu)
+        };
+        radiance[channel] = per_unit * irradiance;
+    }
+    (radiance, transmittance)
+}
+
+/// τ1 per channel at texture coordinate `uv`: `params.optical_thickness` times the thickness texture's red
+/// channel, sampled bilinearly with clamp-to-edge from its half-float quantisation (what the GPU samples).
+pub fn optical_thickness_at(params: &ShadingParams, uv: [f32; 2]) -> [f64; 3] {
+    let scale = params
+        .thickness_texture
+        .as_ref()
+        .map_or(1.0, |texture| sample_bilinear_red(texture, uv));
+    params.optical_thickness.map(|t| f64::from(t) * scale)
+}
+
+/// The CPU evaluation path: every vertex in parallel (each vertex independent, so the result does not
+/// depend on the thread count).
+pub fn per_vertex_slab_values(
+    mesh: &SlabMesh,
+    eye: Vec3,
+    params: &ShadingParams,
+) -> Vec<VertexSlab> {
+    let eye = eye.as_dvec3();
+    (0..mesh.positions.len())
+        .into_par_iter()
+        .map(|vertex| {
+            let tau = optical_thickness_at(params, mesh.uvs[vertex]);
+            let (radiance, transmittance) = slab_values_at(
+                Vec3::from(mesh.positions[vertex]).as_dvec3(),
+                Vec3::from(mesh.normals[vertex]).as_dvec3(),
+                tau,
+                eye,
+                params,
+            );
+            VertexSlab {
+                radiance_per_albedo: radiance.map(|v| v as f32),
+                transmittance: transmittance.map(|v| v as f32),
+            }
+        })
+        .collect()
+}
+
+/// Triangle indices reordered so that triangles farther from the eye (by centroid) come first; ties keep
+/// mesh order, so the order is deterministic. Needed because eq. (9) blending is order dependent.
+pub fn sort_back_to_front(mesh: &SlabMesh, eye: Vec3, sorted: &mut Vec<u32>) {
+    let eye = eye.as_dvec3();
+    let mut keyed: Vec<(f64, usize)> = mesh
+        .indices
+        .chunks_exact(3)
+        .enumerate()
+        .map(|(triangle, corners)| {
+            let centroid = corners
+                .iter()
+                .map(|&i| Vec3::from(mesh.positions[i as usize]).as_dvec3())
+                .sum::<DVec3>()
+                / 3.0;
+            (centroid.distance_squared(eye), triangle)
+        })
+        .collect();
+    keyed.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    sorted.clear();
+    sorted.extend(
+        keyed.iter().flat_map(|&(_, triangle)| {
+            mesh.indices[3 * triangle..3 * triangle + 3].iter().copied()
+        }),
+    );
+}
+
+/// Bilinear sample (clamp to edge, texel centres at (i + ½)/w) of the red channel after half-float
+/// quantisation, matching a wgpu `Rgba16Float` texture with a linear, clamp-to-edge sampler up to the
+/// GPU's sub-texel weight precision.
+pub fn sample_bilinear_red(texture: &Texture2d, uv: [f32; 2]) -> f64 {
+    let (width, height) = (texture.width() as usize, texture.height() as usize);
+    let fetch = |x: isize, y: isize| {
+        let x = x.clamp(0, width as isize - 1) as usize;
+        let y = y.clamp(0, height as isize - 1) as usize;
+        f64::from(quantize_to_half(texture.texels()[y * width + x][0]))
+    };
+    let x = f64::from(uv[0]) * width as f64 - 0.5;
+    let y = f64::from(uv[1]) * height as f64 - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0 as isize, y0 as isize);
+    let top = fetch(x0, y0) * (1.0 - fx) + fetch(x0 + 1, y0) * fx;
+    let bottom = fetch(x0, y0 + 1) * (1.0 - fx) + fetch(x0 + 1, y0 + 1) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+/// IEEE binary16 bits of `value`, rounded to nearest even (overflow → ∞).
+pub fn f32_to_f16_bits(value: f32) -> u16 {
+    let bits = value.to_bits();
+    let sign = ((bits >> 16) & 0x8000) as u16;
+    let exponent = ((bits >> 23) & 0xff) as i32;
+    let mantissa = bits & 0x7f_ffff;
+    if exponent == 0xff {
+        return sign | 0x7c00 | if mantissa != 0 { 0x200 } else { 0 };
+    }
+    let half_exponent = exponent - 127 + 15;
+    if half_exponent >= 0x1f {
+        return sign | 0x7c00;
+    }
+    if half_exponent <= 0 {
+        // Subnormal half: value = m·2^−24 with m = significand·2^(e − 14).
+        if half_exponent < -10 {
+            return sign;
+        }
+        let significand = mantissa | 0x80_0000;
+        let shift = (14 - half_exponent) as u32;
+        let halfway = 1u32 << (shift - 1);
+        let rounded = (significand + halfway - 1 + ((significand >> shift) & 1)) >> shift;
+        return sign | rounded as u16;
+    }
+    let rounded = mantissa + 0xfff + ((mantissa >> 13) & 1);
+    // A carry out of the mantissa correctly bumps the exponent.
+    let out = ((half_exponent as u32) << 10) + (rounded >> 13);
+    sign | out.min(0x7c00) as u16
+}
+
+/// The `f32` value of IEEE binary16 bits.
+pub fn f16_bits_to_f32(bits: u16) -> f32 {
+    let sign = u32::from(bits & 0x8000) << 16;
+    let exponent = u32::from((bits >> 10) & 0x1f);
+    let mantissa = u32::from(bits & 0x3ff);
+    let magnitude = match exponent {
+        0 => (mantissa as f32 * 2f32.powi(-24)).to_bits(),
+        0x1f => 0x7f80_0000 | (mantissa << 13),
+        _ => ((exponent + 112) << 23) | (mantissa << 13),
+    };
+    f32::from_bits(sign | magnitude)
+}
+
+/// `value` rounded to the nearest half float.
+pub fn quantize_to_half(value: f32) -> f32 {
+    f16_bits_to_f32(f32_to_f16_bits(value))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_float_round_trip() {
+        // Exactly representable values survive; 1 + 2^-11 is a tie and rounds to even (1.0).
+        for v in [
+            0.0f32,
+            1.0,
+            0.5,
+            0.75,
+            65504.0,
+            2f32.powi(-14),
+            2f32.powi(-24),
+            -3.25,
+        ] {
+            assert_eq!(quantize_to_half(v), v, "{v}");
+        }
+        assert_eq!(quantize_to_half(1.0 + 2f32.powi(-11)), 1.0);
+        assert_eq!(
+            quantize_to_half(1.0 + 3.0 * 2f32.powi(-11)),
+            1.0 + 2f32.powi(-9)
+        );
+        assert_eq!(f32_to_f16_bits(1e6), 0x7c00);
+        // Relative error of rounding to 11 significant bits is ≤ 2^-11.
+        for v in [0.1f32, 0.3, 0.7, 3.7, 1234.5] {
+            assert!((quantize_to_half(v) - v).abs() <= v * 2f32.powi(-11));
+        }
+    }
+
+    #[test]
+    fn lit_side_rule() {
+        // Normal pointing away from the light is flipped; eye behind → far side.
+        let (mu0, mu, lit) = lit_side_cosines(-DVec3::Z, DVec3::Z, -DVec3::Z * 2.0);
+        assert_eq!((mu0, mu, lit), (1.0, 1.0, false));
+        assert_eq!(
+            lit_side_cosines(DVec3::ZERO, DVec3::Z, DVec3::Z),
+            (0.0, 0.0, true)
+        );
+    }
+
+    #[test]
+    fn sort_puts_far_triangles_first() {
+        let near = SlabMesh::flat_sheet(Vec3::new(0.0, 0.0, 1.0), Vec3::X, Vec3::Y, Vec3::Z, 1, 1)
+            .unwrap();
+        let far = SlabMesh::flat_sheet(Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, 1, 1).unwrap();
+        let mut mesh = near.clone();
+        mesh.append(&far);
+        let mut sorted = Vec::new();
+        sort_back_to_front(&mesh, Vec3::new(0.5, 0.5, 5.0), &mut sorted);
+        // The far sheet's vertices are 4..8.
+        assert!(sorted[..6].iter().all(|&i| i >= 4));
+        assert!(sorted[6..].iter().all(|&i| i < 4));
+    }
+}

@@ -1,0 +1,1029 @@
+//! Headless wgpu renderer of the thin-slab model (Frisvad, Christensen & Falster 2005, §4): the three
+//! evaluation paths the paper measures (per fragment, per vertex in the vertex shader, per vertex on the
+//! CPU) and the traditional baseline (diffuse BRDF, constant α = 0.2), blended as eq. (9)
+//! (`L_dst·α_src + L_src`) over a background, triangles sorted back to front every frame, into a linear
+//! float target that is read back.
+//!
+//! Adapter choice: `WGPU_BACKEND` if set, else Vulkan (Mesa lavapipe on a machine without a GPU) and then
+//! GL (llvmpipe over EGL); the first adapter of the preferred backend wins, hardware before software.
+
+mod cpu;
+mod scene;
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use bytemuck::{Pod, Zeroable};
+use thiserror::Error;
+
+pub use cpu::{
+    COSINE_FLOOR, VertexSlab, f16_bits_to_f32, f32_to_f16_bits, lit_side_cosines,
+    optical_thickness_at, per_vertex_slab_values, quantize_to_half, sample_bilinear_red,
+    slab_values_at, sort_back_to_front,
+};
+pub use scene::{
+    Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams, SlabMesh, Texture2d,
+    linear_to_srgb8,
+};
+
+use crate::model::IrradianceConvention;
+
+const SHADER_BODY: &str = include_str!("../../../../shaders/thin_slab.wgsl");
+const LIT_SIDE: &str = include_str!("../../../../shaders/lit_side.wgsl");
+const OUTPUT_SINGLE: &str = include_str!("../../../../shaders/slab_output_single.wgsl");
+const OUTPUT_DUAL: &str = include_str!("../../../../shaders/slab_output_dual.wgsl");
+
+/// Where the model is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EvaluationPath {
+    /// Eqs. (4)–(9) in the fragment shader (the paper's 300 fps path).
+    PerFragment,
+    /// In the vertex shader, interpolated (480 fps in the paper).
+    PerVertex,
+    /// Per vertex on the CPU with rayon, uploaded every frame (190 fps in the paper).
+    Cpu,
+    /// Traditional: diffuse BRDF, constant α, back-lit side black.
+    Baseline,
+}
+
+impl EvaluationPath {
+    /// All paths, baseline last.
+    pub const ALL: [Self; 4] = [
+        Self::PerFragment,
+        Self::PerVertex,
+        Self::Cpu,
+        Self::Baseline,
+    ];
+
+    /// Short name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::PerFragment => "per-fragment",
+            Self::PerVertex => "per-vertex",
+            Self::Cpu => "cpu",
+            Self::Baseline => "baseline",
+        }
+    }
+
+    fn entry_points(self) -> (&'static str, &'static str) {
+        match self {
+            Self::PerFragment => ("vs_per_fragment", "fs_per_fragment"),
+            Self::PerVertex => ("vs_per_vertex", "fs_interpolated"),
+            Self::Cpu => ("vs_cpu", "fs_interpolated"),
+            Self::Baseline => ("vs_per_fragment", "fs_baseline"),
+        }
+    }
+}
+
+/// Why rendering failed.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    /// No GPU or software adapter (Vulkan or GL) could be found.
+    #[error(
+        "no graphics adapter found for backends {backends}: install Mesa's software drivers \
+         (lavapipe: mesa-vulkan-drivers; llvmpipe: libegl-mesa0) or a GPU driver, or choose backends \
+         with WGPU_BACKEND=vulkan|gl"
+    )]
+    NoAdapter {
+        /// The backends that were searched.
+        backends: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("could not create a device on {adapter}: {message}")]
+    RequestDevice {
+        /// The adapter's name and backend.
+        adapter: String,
+        /// wgpu's reason.
+        message: String,
+    },
+    /// A wgpu validation or out-of-memory error.
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    /// Width or height is zero or beyond the device's limit.
+    #[error("render size {width}x{height} is not supported (1..={max} per side)")]
+    Size {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// The device's maximum 2-D texture dimension.
+        max: u32,
+    },
+    /// Bad mesh.
+    #[error("invalid mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// Bad shading parameters.
+    #[error("invalid shading parameters: {0}")]
+    Shading(#[from] ShadingError),
+    /// A background image must have the render target's size.
+    #[error("background image is {got_width}x{got_height}, the target is {width}x{height}")]
+    BackgroundSize {
+        /// Image width.
+        got_width: u32,
+        /// Image height.
+        got_height: u32,
+        /// Target width.
+        width: u32,
+        /// Target height.
+        height: u32,
+    },
+    /// Per-channel τ1 needs per-channel α, i.e. dual-source blending, which this adapter lacks.
+    #[error(
+        "optical thickness differs between channels but the adapter has no dual-source blending"
+    )]
+    PerChannelAlphaUnsupported,
+}
+
+/// The linear render target's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TargetFormat {
+    /// 32-bit float per channel (adapter supports blending it).
+    Rgba32Float,
+    /// 16-bit float per channel (relative precision 2^-11).
+    Rgba16Float,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct FrameUniform {
+    view_projection: [[f32; 4]; 4],
+    eye: [f32; 4],
+    light: [f32; 4],
+    optical_thickness: [f32; 4],
+    albedo_scale: [f32; 4],
+    background: [f32; 4],
+    baseline: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct Vertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    uv: [f32; 2],
+}
+
+struct GpuTexture {
+    // Held so the texture outlives every bind group made from `view`.
+    _texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    source: Option<Texture2d>,
+}
+
+/// A renderer without a window: renders into a linear float texture and reads it back.
+pub struct HeadlessRenderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    adapter_description: String,
+    width: u32,
+    height: u32,
+    target_format: TargetFormat,
+    dual_source: bool,
+    target: wgpu::Texture,
+    target_view: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    padded_row_bytes: u32,
+    uniform: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    bind_group_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    modules: HashMap<bool, wgpu::ShaderModule>,
+    pipelines: HashMap<(EvaluationPath, bool), wgpu::RenderPipeline>,
+    background_pipeline: Option<wgpu::RenderPipeline>,
+    albedo: GpuTexture,
+    thickness: GpuTexture,
+    background: GpuTexture,
+    vertex_buffer: Option<(wgpu::Buffer, usize)>,
+    cpu_buffer: Option<(wgpu::Buffer, usize)>,
+    index_buffer: Option<(wgpu::Buffer, usize)>,
+    sorted_indices: Vec<u32>,
+    vertex_scratch: Vec<Vertex>,
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+fn target_wgpu_format(format: TargetFormat) -> wgpu::TextureFormat {
+    match format {
+        TargetFormat::Rgba32Float => wgpu::TextureFormat::Rgba32Float,
+        TargetFormat::Rgba16Float => wgpu::TextureFormat::Rgba16Float,
+    }
+}
+
+fn backend_rank(backend: wgpu::Backend) -> u8 {
+    match backend {
+        wgpu::Backend::Vulkan => 0,
+        wgpu::Backend::Gl => 1,
+        _ => 2,
+    }
+}
+
+fn device_rank(device_type: wgpu::DeviceType) -> u8 {
+    match device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
+
+impl HeadlessRenderer {
+    /// Finds an adapter (see the module docs), creates a device and a `width × height` linear target.
+    pub fn new(width: u32, height: u32) -> Result<Self, RenderError> {
+        let backends =
+            wgpu::Backends::from_env().unwrap_or(wgpu::Backends::VULKAN | wgpu::Backends::GL);
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
+        descriptor.backends = backends;
+        descriptor.flags = wgpu::InstanceFlags::from_build_config().with_env();
+        let instance = wgpu::Instance::new(descriptor);
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        adapters.sort_by_key(|adapter| {
+            let info = adapter.get_info();
+            (backend_rank(info.backend), device_rank(info.device_type))
+        });
+        let Some(adapter) = adapters.into_iter().next() else {
+            return Err(RenderError::NoAdapter {
+                backends: format!("{backends:?}"),
+            });
+        };
+        let info = adapter.get_info();
+        let adapter_description =
+            format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+
+        let available = adapter.features();
+        let mut required_features = wgpu::Features::empty();
+        let target_format = if available.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+            required_features |= wgpu::Features::FLOAT32_BLENDABLE;
+            TargetFormat::Rgba32Float
+        } else {
+            TargetFormat::Rgba16Float
+        };
+        let dual_source = available.contains(wgpu::Features::DUAL_SOURCE_BLENDING);
+        if dual_source {
+            required_features |= wgpu::Features::DUAL_SOURCE_BLENDING;
+        }
+        let limits = adapter.limits();
+        let max = limits.max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(RenderError::Size { width, height, max });
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("sheer-slab"),
+            required_features,
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .map_err(|error| RenderError::RequestDevice {
+            adapter: adapter_description.clone(),
+            message: error.to_string(),
+        })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&uncaptured);
+        device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
+            if let Ok(mut errors) = sink.lock() {
+                errors.push(error.to_string());
+            }
+        }));
+
+        let target = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("linear radiance target"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: target_wgpu_format(target_format),
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let target_view = target.create_view(&wgpu::TextureViewDescriptor::default());
+        let bytes_per_pixel = match target_format {
+            TargetFormat::Rgba32Float => 16,
+            TargetFormat::Rgba16Float => 8,
+        };
+        let padded_row_bytes = (width * bytes_per_pixel)
+            .div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(padded_row_bytes) * u64::from(height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame uniform"),
+            size: std::mem::size_of::<FrameUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("linear clamp"),
+            address_mode_u: wgpu::AddressMode::ClampToEdge,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let texture_entry = |binding: u32, filterable: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("slab bindings"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                texture_entry(1, true),
+                texture_entry(2, true),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+                texture_entry(4, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("slab layout"),
+            bind_group_layouts: &[Some(&bind_group_layout)],
+            immediate_size: 0,
+        });
+        let white = Texture2d::uniform([1.0; 4])?;
+        let albedo =
+            Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba16Float);
+        let thickness =
+            Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba16Float);
+        let background =
+            Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba32Float);
+        let mut renderer = Self {
+            device,
+            queue,
+            adapter_description,
+            width,
+            height,
+            target_format,
+            dual_source,
+            target,
+            target_view,
+            readback,
+            padded_row_bytes,
+            uniform,
+            sampler,
+            bind_group_layout,
+            pipeline_layout,
+            modules: HashMap::new(),
+            pipelines: HashMap::new(),
+            background_pipeline: None,
+            albedo,
+            thickness,
+            background,
+            vertex_buffer: None,
+            cpu_buffer: None,
+            index_buffer: None,
+            sorted_indices: Vec::new(),
+            vertex_scratch: Vec::new(),
+            uncaptured,
+        };
+        renderer.background_pipeline = Some(renderer.create_background_pipeline()?);
+        Ok(renderer)
+    }
+
+    /// The adapter in use: name, backend and driver.
+    pub fn adapter_description(&self) -> &str {
+        &self.adapter_description
+    }
+
+    /// The linear target's format.
+    pub fn target_format(&self) -> TargetFormat {
+        self.target_format
+    }
+
+    /// Whether per-channel τ1 (dual-source blending) is available.
+    pub fn supports_per_channel_optical_thickness(&self) -> bool {
+        self.dual_source
+    }
+
+    /// Target size (width, height).
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Renders one frame and reads the linear radiance image back.
+    pub fn render(
+        &mut self,
+        mesh: &SlabMesh,
+        camera: &Camera,
+        shading: &ShadingParams,
+        background: &Background,
+        path: EvaluationPath,
+    ) -> Result<LinearImage, RenderError> {
+        self.render_frame(mesh, camera, shading, background, path)?;
+        self.read_target()
+    }
+
+    /// Renders one frame (sort, per-path evaluation and uploads, background, slab) and waits until the GPU
+    /// has finished it, without reading it back (for benchmarks).
+    pub fn render_frame(
+        &mut self,
+        mesh: &SlabMesh,
+        camera: &Camera,
+        shading: &ShadingParams,
+        background: &Background,
+        path: EvaluationPath,
+    ) -> Result<(), RenderError> {
+        mesh.validate()?;
+        shading.validate()?;
+        let dual = !shading.grey_optical_thickness();
+        if dual && !self.dual_source {
+            return Err(RenderError::PerChannelAlphaUnsupported);
+        }
+        self.update_textures(shading, background)?;
+        let uniform = self.frame_uniform(camera, shading, background);
+        self.queue
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        self.upload_mesh(mesh, camera, shading, path);
+        self.pipeline(path, dual)?;
+
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("slab bind group"),
+            layout: &self.bind_group_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&self.albedo.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&self.thickness.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&self.background.view),
+                },
+            ],
+        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("slab pass"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.target_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &bind_group, &[]);
+            if let Some(background_pipeline) = &self.background_pipeline {
+                pass.set_pipeline(background_pipeline);
+                pass.draw(0..3, 0..1);
+            }
+            let pipeline = &self.pipelines[&(path, dual)];
+            pass.set_pipeline(pipeline);
+            if let Some((buffer, _)) = &self.vertex_buffer {
+                pass.set_vertex_buffer(0, buffer.slice(..));
+            }
+            if path == EvaluationPath::Cpu
+                && let Some((buffer, _)) = &self.cpu_buffer
+            {
+                pass.set_vertex_buffer(1, buffer.slice(..));
+            }
+            if let Some((buffer, _)) = &self.index_buffer {
+                pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
+            }
+            pass.draw_indexed(0..mesh.indices.len() as u32, 0, 0..1);
+        }
+        self.queue.submit([encoder.finish()]);
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|error| RenderError::Gpu(error.to_string()))?;
+        self.take_uncaptured()
+    }
+
+    /// Reads the last rendered frame back as linear radiance.
+    pub fn read_target(&mut self) -> Result<LinearImage, RenderError> {
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("readback"),
+            });
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.target,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row_bytes),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.queue.submit([encoder.finish()]);
+        let slice = self.readback.slice(..);
+        let status = Arc::new(Mutex::new(None));
+        let status_sink = Arc::clone(&status);
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            if let Ok(mut slot) = status_sink.lock() {
+                *slot = Some(result);
+            }
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|error| RenderError::Gpu(error.to_string()))?;
+        let mapped = status.lock().ok().and_then(|mut slot| slot.take());
+        match mapped {
+            Some(Ok(())) => {}
+            Some(Err(error)) => {
+                return Err(RenderError::Gpu(format!("mapping the readback: {error}")));
+            }
+            None => return Err(RenderError::Gpu("readback never mapped".into())),
+        }
+        let mut pixels = Vec::with_capacity((self.width * self.height) as usize);
+        {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?;
+            for row in 0..self.height as usize {
+                let start = row * self.padded_row_bytes as usize;
+                match self.target_format {
+                    TargetFormat::Rgba32Float => {
+                        let bytes = &data[start..start + self.width as usize * 16];
+                        pixels.extend(bytes.chunks_exact(16).map(|texel| {
+                            let mut value = [0.0f32; 4];
+                            for (channel, chunk) in value.iter_mut().zip(texel.chunks_exact(4)) {
+                                *channel =
+                                    f32::from_le_bytes([chunk[0], chunk[1], chunk[2], chunk[3]]);
+                            }
+                            value
+                        }));
+                    }
+                    TargetFormat::Rgba16Float => {
+                        let bytes = &data[start..start + self.width as usize * 8];
+                        pixels.extend(bytes.chunks_exact(8).map(|texel| {
+                            let mut value = [0.0f32; 4];
+                            for (channel, chunk) in value.iter_mut().zip(texel.chunks_exact(2)) {
+                                *channel =
+                                    f16_bits_to_f32(u16::from_le_bytes([chunk[0], chunk[1]]));
+                            }
+                            value
+                        }));
+                    }
+                }
+            }
+        }
+        self.readback.unmap();
+        self.take_uncaptured()?;
+        Ok(LinearImage {
+            width: self.width,
+            height: self.height,
+            pixels,
+        })
+    }
+
+    fn take_uncaptured(&self) -> Result<(), RenderError> {
+        let mut errors = self
+            .uncaptured
+            .lock()
+            .map_err(|_| RenderError::Gpu("error log poisoned".into()))?;
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            let message = errors.join("; ");
+            errors.clear();
+            Err(RenderError::Gpu(message))
+        }
+    }
+
+    fn frame_uniform(
+        &self,
+        camera: &Camera,
+        shading: &ShadingParams,
+        background: &Background,
+    ) -> FrameUniform {
+        let [t0, t1, t2] = shading.optical_thickness;
+        let [a0, a1, a2] = shading.albedo_scale;
+        let eye = camera.eye;
+        let light = shading.light_position;
+        FrameUniform {
+            view_projection: camera
+                .view_projection(self.width, self.height)
+                .to_cols_array_2d(),
+            eye: [eye.x, eye.y, eye.z, 1.0],
+            light: [light.x, light.y, light.z, shading.light_flux],
+            optical_thickness: [
+                t0,
+                t1,
+                t2,
+                if shading.thickness_texture.is_some() {
+                    1.0
+                } else {
+                    0.0
+                },
+            ],
+            albedo_scale: [
+                a0,
+                a1,
+                a2,
+                match shading.convention {
+                    IrradianceConvention::NormalToBeam => 0.0,
+                    IrradianceConvention::PaperLiteral => 1.0,
+                },
+            ],
+            background: match background {
+                Background::Uniform([r, g, b]) => [*r, *g, *b, 0.0],
+                Background::Image(_) => [0.0, 0.0, 0.0, 1.0],
+            },
+            baseline: [shading.baseline_transmittance, 0.0, 0.0, 0.0],
+        }
+    }
+
+    fn update_textures(
+        &mut self,
+        shading: &ShadingParams,
+        background: &Background,
+    ) -> Result<(), RenderError> {
+        if self.albedo.source.as_ref() != Some(&shading.albedo_texture) {
+            self.albedo = Self::upload_texture(
+                &self.device,
+                &self.queue,
+                &shading.albedo_texture,
+                wgpu::TextureFormat::Rgba16Float,
+            );
+        }
+        if let Some(thickness) = &shading.thickness_texture
+            && self.thickness.source.as_ref() != Some(thickness)
+        {
+            self.thickness = Self::upload_texture(
+                &self.device,
+                &self.queue,
+                thickness,
+                wgpu::TextureFormat::Rgba16Float,
+            );
+        }
+        match background {
+            Background::Uniform(colour) => {
+                if !colour.iter().all(|c| c.is_finite()) {
+                    return Err(ShadingError::NonFiniteTexel { index: 0 }.into());
+                }
+            }
+            Background::Image(image) => {
+                if image.width() != self.width || image.height() != self.height {
+                    return Err(RenderError::BackgroundSize {
+                        got_width: image.width(),
+                        got_height: image.height(),
+                        width: self.width,
+                        height: self.height,
+                    });
+                }
+                if self.background.source.as_ref() != Some(image) {
+                    self.background = Self::upload_texture(
+                        &self.device,
+                        &self.queue,
+                        image,
+                        wgpu::TextureFormat::Rgba32Float,
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn upload_texture(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        source: &Texture2d,
+        format: wgpu::TextureFormat,
+    ) -> GpuTexture {
+        let size = wgpu::Extent3d {
+            width: source.width(),
+            height: source.height(),
+            depth_or_array_layers: 1,
+        };
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("slab texture"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let (bytes, bytes_per_texel): (Vec<u8>, u32) = match format {
+            wgpu::TextureFormat::Rgba16Float => (
+                source
+                    .texels()
+                    .iter()
+                    .flat_map(|texel| texel.map(f32_to_f16_bits))
+                    .flat_map(u16::to_le_bytes)
+                    .collect(),
+                8,
+            ),
+            _ => (bytemuck::cast_slice(source.texels()).to_vec(), 16),
+        };
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(source.width() * bytes_per_texel),
+                rows_per_image: Some(source.height()),
+            },
+            size,
+        );
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        GpuTexture {
+            _texture: texture,
+            view,
+            source: Some(source.clone()),
+        }
+    }
+
+    fn upload_mesh(
+        &mut self,
+        mesh: &SlabMesh,
+        camera: &Camera,
+        shading: &ShadingParams,
+        path: EvaluationPath,
+    ) {
+        self.vertex_scratch.clear();
+        self.vertex_scratch
+            .extend((0..mesh.positions.len()).map(|i| Vertex {
+                position: mesh.positions[i],
+                normal: mesh.normals[i],
+                uv: mesh.uvs[i],
+            }));
+        let vertices = std::mem::take(&mut self.vertex_scratch);
+        Self::write_buffer(
+            &self.device,
+            &self.queue,
+            &mut self.vertex_buffer,
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX,
+        );
+        self.vertex_scratch = vertices;
+        sort_back_to_front(mesh, camera.eye, &mut self.sorted_indices);
+        let indices = std::mem::take(&mut self.sorted_indices);
+        Self::write_buffer(
+            &self.device,
+            &self.queue,
+            &mut self.index_buffer,
+            bytemuck::cast_slice(&indices),
+            wgpu::BufferUsages::INDEX,
+        );
+        self.sorted_indices = indices;
+        if path == EvaluationPath::Cpu {
+            let values = per_vertex_slab_values(mesh, camera.eye, shading);
+            Self::write_buffer(
+                &self.device,
+                &self.queue,
+                &mut self.cpu_buffer,
+                bytemuck::cast_slice(&values),
+                wgpu::BufferUsages::VERTEX,
+            );
+        }
+    }
+
+    fn write_buffer(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        slot: &mut Option<(wgpu::Buffer, usize)>,
+        bytes: &[u8],
+        usage: wgpu::BufferUsages,
+    ) {
+        let fits = matches!(slot, Some((_, capacity)) if *capacity == bytes.len());
+        if !fits {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("mesh data"),
+                size: bytes.len() as u64,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            *slot = Some((buffer, bytes.len()));
+        }
+        if let Some((buffer, _)) = slot {
+            queue.write_buffer(buffer, 0, bytes);
+        }
+    }
+
+    fn module(&mut self, dual: bool) -> Result<wgpu::ShaderModule, RenderError> {
+        if let Some(module) = self.modules.get(&dual) {
+            return Ok(module.clone());
+        }
+        let source = format!(
+            "{}\n{}\n{}",
+            if dual { OUTPUT_DUAL } else { OUTPUT_SINGLE },
+            LIT_SIDE,
+            SHADER_BODY
+        );
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = self
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(if dual {
+                    "thin_slab (dual source)"
+                } else {
+                    "thin_slab"
+                }),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(format!("shader: {error}")));
+        }
+        self.modules.insert(dual, module.clone());
+        Ok(module)
+    }
+
+    fn create_background_pipeline(&mut self) -> Result<wgpu::RenderPipeline, RenderError> {
+        let module = self.module(false)?;
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let pipeline = self
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("background"),
+                layout: Some(&self.pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_background"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_background"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: target_wgpu_format(self.target_format),
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(format!("background pipeline: {error}")));
+        }
+        Ok(pipeline)
+    }
+
+    fn pipeline(&mut self, path: EvaluationPath, dual: bool) -> Result<(), RenderError> {
+        if self.pipelines.contains_key(&(path, dual)) {
+            return Ok(());
+        }
+        let module = self.module(dual)?;
+        let (vertex_entry, fragment_entry) = path.entry_points();
+        let mesh_attributes =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+        let cpu_attributes = wgpu::vertex_attr_array![3 => Float32x3, 4 => Float32x3];
+        let mut buffers = vec![Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Vertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &mesh_attributes,
+        })];
+        if path == EvaluationPath::Cpu {
+            buffers.push(Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<VertexSlab>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &cpu_attributes,
+            }));
+        }
+        // Eq. (9): L_dst·α_src + L_src. The alpha channel keeps the product of the α drawn over the
+        // background (which writes alpha 1).
+        let (colour_factor, alpha_factor) = if dual {
+            (wgpu::BlendFactor::Src1, wgpu::BlendFactor::Src1Alpha)
+        } else {
+            (wgpu::BlendFactor::SrcAlpha, wgpu::BlendFactor::SrcAlpha)
+        };
+        let blend = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: colour_factor,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: alpha_factor,
+                operation: wgpu::BlendOperation::Add,
+            },
+        };
+        // Specialises the shader: per-channel τ1 evaluates the model three times, grey τ1 once.
+        let constants = [("per_channel_thickness", if dual { 1.0 } else { 0.0 })];
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let pipeline = self
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(path.name()),
+                layout: Some(&self.pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vertex_entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    buffers: &buffers,
+                },
+                // Both faces: the slab is seen from either side.
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fragment_entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: target_wgpu_format(self.target_format),
+                        blend: Some(blend),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(format!(
+                "{} pipeline: {error}",
+                path.name()
+            )));
+        }
+        self.pipelines.insert((path, dual), pipeline);
+        Ok(())
+    }
+}
+
+impl std::fmt::Debug for HeadlessRenderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HeadlessRenderer")
+            .field("adapter", &self.adapter_description)
+            .field("size", &(self.width, self.height))
+            .field("target_format", &self.target_format)
+            .field("dual_source", &self.dual_source)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Whether GPU tests may be skipped: `SHEER_SKIP_GPU_TESTS=1`. Without it, a missing adapter fails them.
+pub fn gpu_tests_may_be_skipped() -> bool {
+    std::env::var("SHEER_SKIP_GPU_TESTS").is_ok_and(|v| v == "1")
+}

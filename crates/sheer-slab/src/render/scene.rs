@@ -1,0 +1,545 @@
+//! Plain-data inputs of the renderer: the mesh, the camera, the shading parameters, the background, and
+//! the linear image that comes back (with exposure and sRGB encoding for display).
+
+use std::path::Path;
+
+use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
+use thiserror::Error;
+
+use crate::model::IrradianceConvention;
+
+/// Why a mesh was rejected.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MeshError {
+    /// Positions, normals and uvs must have one entry per vertex.
+    #[error("mesh has {positions} positions, {normals} normals and {uvs} uvs; they must be equal")]
+    LengthMismatch {
+        /// Number of positions.
+        positions: usize,
+        /// Number of normals.
+        normals: usize,
+        /// Number of uvs.
+        uvs: usize,
+    },
+    /// Triangle list needs a multiple of three indices, at least one triangle.
+    #[error("mesh has {0} indices; need a positive multiple of 3")]
+    IndexCount(usize),
+    /// An index points past the vertices.
+    #[error("index {index} at position {position} is out of range for {vertices} vertices")]
+    IndexOutOfRange {
+        /// The index value.
+        index: u32,
+        /// Where in the index list.
+        position: usize,
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// A NaN or infinite coordinate.
+    #[error("vertex {vertex} has a non-finite {attribute}")]
+    NonFinite {
+        /// "position", "normal" or "uv".
+        attribute: &'static str,
+        /// Vertex number.
+        vertex: usize,
+    },
+    /// A flat sheet needs at least one segment each way and two independent edges.
+    #[error("flat sheet needs segments >= 1 and non-parallel, non-zero edges")]
+    DegenerateSheet,
+}
+
+/// A triangle mesh as plain data. Normals are per vertex and already turned toward the light (the renderer
+/// turns the interpolated normal toward the light again per fragment, as `shaders/lit_side.wgsl` does).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SlabMesh {
+    /// Vertex positions (m).
+    pub positions: Vec<[f32; 3]>,
+    /// Vertex normals (any length > 0).
+    pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates in [0, 1]² (albedo and thickness textures).
+    pub uvs: Vec<[f32; 2]>,
+    /// Triangle list.
+    pub indices: Vec<u32>,
+}
+
+impl SlabMesh {
+    /// Checks lengths, index range and finiteness.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        let vertices = self.positions.len();
+        if self.normals.len() != vertices || self.uvs.len() != vertices {
+            return Err(MeshError::LengthMismatch {
+                positions: vertices,
+                normals: self.normals.len(),
+                uvs: self.uvs.len(),
+            });
+        }
+        if self.indices.is_empty() || self.indices.len() % 3 != 0 {
+            return Err(MeshError::IndexCount(self.indices.len()));
+        }
+        if let Some((position, &index)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find(|&(_, &i)| i as usize >= vertices)
+        {
+            return Err(MeshError::IndexOutOfRange {
+                index,
+                position,
+                vertices,
+            });
+        }
+        for vertex in 0..vertices {
+            let checks: [(&'static str, bool); 3] = [
+                (
+                    "position",
+                    self.positions[vertex].iter().all(|c| c.is_finite()),
+                ),
+                ("normal", self.normals[vertex].iter().all(|c| c.is_finite())),
+                ("uv", self.uvs[vertex].iter().all(|c| c.is_finite())),
+            ];
+            if let Some(&(attribute, _)) = checks.iter().find(|(_, ok)| !ok) {
+                return Err(MeshError::NonFinite { attribute, vertex });
+            }
+        }
+        Ok(())
+    }
+
+    /// A flat parallelogram `origin + s·u_edge + t·v_edge`, (s, t) in [0, 1]², split into
+    /// `segments_u × segments_v` quads of two triangles, uv = (s, t), every normal = `normal`.
+    pub fn flat_sheet(
+        origin: Vec3,
+        u_edge: Vec3,
+        v_edge: Vec3,
+        normal: Vec3,
+        segments_u: u32,
+        segments_v: u32,
+    ) -> Result<Self, MeshError> {
+        if segments_u == 0 || segments_v == 0 || u_edge.cross(v_edge).length_squared() <= 0.0 {
+            return Err(MeshError::DegenerateSheet);
+        }
+        let mut mesh = Self::default();
+        for j in 0..=segments_v {
+            for i in 0..=segments_u {
+                let s = i as f32 / segments_u as f32;
+                let t = j as f32 / segments_v as f32;
+                mesh.positions
+                    .push((origin + s * u_edge + t * v_edge).to_array());
+                mesh.normals.push(normal.to_array());
+                mesh.uvs.push([s, t]);
+            }
+        }
+        let row = segments_u + 1;
+        for j in 0..segments_v {
+            for i in 0..segments_u {
+                let a = j * row + i;
+                mesh.indices
+                    .extend_from_slice(&[a, a + 1, a + row + 1, a, a + row + 1, a + row]);
+            }
+        }
+        mesh.validate()?;
+        Ok(mesh)
+    }
+
+    /// Appends another mesh (for scenes of several sheets).
+    pub fn append(&mut self, other: &SlabMesh) {
+        let offset = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.uvs.extend_from_slice(&other.uvs);
+        self.indices
+            .extend(other.indices.iter().map(|i| i + offset));
+    }
+}
+
+/// A pinhole camera (right-handed, depth range 0..1 as wgpu expects).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position (m).
+    pub eye: Vec3,
+    /// Point looked at (m).
+    pub target: Vec3,
+    /// Up direction.
+    pub up: Vec3,
+    /// Vertical field of view (rad).
+    pub vertical_fov: f32,
+    /// Near plane distance (m).
+    pub near: f32,
+    /// Far plane distance (m).
+    pub far: f32,
+}
+
+impl Camera {
+    /// World → clip transform for an image of `width × height` pixels.
+    pub fn view_projection(&self, width: u32, height: u32) -> Mat4 {
+        self.view_projection_f64(width, height).as_mat4()
+    }
+
+    fn view_projection_f64(&self, width: u32, height: u32) -> DMat4 {
+        let aspect = f64::from(width) / f64::from(height);
+        let view = glam::dcamera::rh::view::look_at_mat4(
+            self.eye.as_dvec3(),
+            self.target.as_dvec3(),
+            self.up.as_dvec3(),
+        );
+        // WebGPU clip space: depth in [0, 1], y up.
+        let projection = glam::dcamera::rh::proj::directx::perspective(
+            f64::from(self.vertical_fov),
+            aspect,
+            f64::from(self.near),
+            f64::from(self.far),
+        );
+        projection * view
+    }
+
+    /// The ray (origin, unit direction) through the point `(x, y)` of the image in pixel units, (0, 0)
+    /// being the top-left corner of the image (pixel centres are at half-integers), in `f64`: for reference
+    /// computations that must match the rasteriser's sample positions.
+    pub fn pixel_ray(&self, x: f64, y: f64, width: u32, height: u32) -> (DVec3, DVec3) {
+        let inverse = self.view_projection_f64(width, height).inverse();
+        let ndc_x = 2.0 * x / f64::from(width) - 1.0;
+        let ndc_y = 1.0 - 2.0 * y / f64::from(height);
+        let near = inverse * DVec4::new(ndc_x, ndc_y, 0.0, 1.0);
+        let far = inverse * DVec4::new(ndc_x, ndc_y, 1.0, 1.0);
+        let near = near.truncate() / near.w;
+        let far = far.truncate() / far.w;
+        let origin = self.eye.as_dvec3();
+        (origin, (far - near).normalize())
+    }
+}
+
+/// An RGBA image of `f32` texels, row-major from the top (v = 0) row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture2d {
+    width: u32,
+    height: u32,
+    texels: Vec<[f32; 4]>,
+}
+
+impl Texture2d {
+    /// An image; `texels.len()` must be `width·height`, all finite.
+    pub fn new(width: u32, height: u32, texels: Vec<[f32; 4]>) -> Result<Self, ShadingError> {
+        if width == 0 || height == 0 || texels.len() != width as usize * height as usize {
+            return Err(ShadingError::TextureSize {
+                width,
+                height,
+                texels: texels.len(),
+            });
+        }
+        if let Some(index) = texels.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
+            return Err(ShadingError::NonFiniteTexel { index });
+        }
+        Ok(Self {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    /// A 1×1 image.
+    pub fn uniform(value: [f32; 4]) -> Result<Self, ShadingError> {
+        Self::new(1, 1, vec![value])
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Texels, row-major.
+    pub fn texels(&self) -> &[[f32; 4]] {
+        &self.texels
+    }
+}
+
+/// Why shading parameters were rejected.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ShadingError {
+    /// Texture dimensions and texel count disagree.
+    #[error("texture of {width}x{height} has {texels} texels")]
+    TextureSize {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// Texels given.
+        texels: usize,
+    },
+    /// A NaN or infinite texel.
+    #[error("texel {index} is not finite")]
+    NonFiniteTexel {
+        /// Texel number.
+        index: usize,
+    },
+    /// τ1 per channel must be finite and > 0.
+    #[error("optical thickness {0:?} must be finite and > 0 in every channel")]
+    OpticalThickness([f32; 3]),
+    /// Albedo scale times albedo texel must stay in [0, 1].
+    #[error("albedo (scale {scale:?} times texel {texel}) leaves [0, 1]")]
+    Albedo {
+        /// The scale.
+        scale: [f32; 3],
+        /// First offending texel.
+        texel: usize,
+    },
+    /// Thickness texels (red channel, multiplying τ1) must be in [2^-14, 65504] (normal half floats).
+    #[error("thickness texel {texel} = {value} is outside [6.1e-5, 65504]")]
+    Thickness {
+        /// Texel number.
+        texel: usize,
+        /// Its red channel.
+        value: f32,
+    },
+    /// Flux Φ must be finite and ≥ 0.
+    #[error("light flux {0} W must be finite and >= 0")]
+    Flux(f32),
+    /// The light position must be finite.
+    #[error("light position {0:?} is not finite")]
+    LightPosition([f32; 3]),
+    /// Exposure must be finite and > 0.
+    #[error("exposure {0} must be finite and > 0")]
+    Exposure(f32),
+    /// The baseline's constant α must be in [0, 1].
+    #[error("baseline transmittance {0} is outside [0, 1]")]
+    BaselineTransmittance(f32),
+}
+
+/// Material, light and display parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadingParams {
+    /// τ1 per channel (dimensionless, > 0). Equal channels render with blend factor SrcAlpha; different
+    /// channels need dual-source blending.
+    pub optical_thickness: [f32; 3],
+    /// Multiplies the albedo texture to give Λ per channel.
+    pub albedo_scale: [f32; 3],
+    /// Albedo texture (the flag's colours), linear, rgb used.
+    pub albedo_texture: Texture2d,
+    /// Optional thickness texture: its red channel multiplies τ1 (the paper's weave/bump-map suggestion).
+    pub thickness_texture: Option<Texture2d>,
+    /// Point-light position (m).
+    pub light_position: Vec3,
+    /// Point-light flux Φ (W), isotropic.
+    pub light_flux: f32,
+    /// Irradiance convention for eqs. (4)–(5).
+    pub convention: IrradianceConvention,
+    /// Display exposure: linear radiance (W/(m²·sr)) times this is the display value before sRGB encoding.
+    pub exposure: f32,
+    /// The baseline's constant α (0.2 in the paper's figure 2).
+    pub baseline_transmittance: f32,
+}
+
+impl ShadingParams {
+    /// Uniform τ1 and Λ, white albedo texture, no thickness texture, baseline α = 0.2, exposure 1.
+    pub fn uniform(
+        optical_thickness: f32,
+        albedo: f32,
+        light_position: Vec3,
+        light_flux: f32,
+    ) -> Result<Self, ShadingError> {
+        let params = Self {
+            optical_thickness: [optical_thickness; 3],
+            albedo_scale: [albedo; 3],
+            albedo_texture: Texture2d::uniform([1.0; 4])?,
+            thickness_texture: None,
+            light_position,
+            light_flux,
+            convention: IrradianceConvention::default(),
+            exposure: 1.0,
+            baseline_transmittance: 0.2,
+        };
+        params.validate()?;
+        Ok(params)
+    }
+
+    /// Checks every parameter's domain.
+    pub fn validate(&self) -> Result<(), ShadingError> {
+        if !self
+            .optical_thickness
+            .iter()
+            .all(|t| t.is_finite() && *t > 0.0)
+        {
+            return Err(ShadingError::OpticalThickness(self.optical_thickness));
+        }
+        for (texel, value) in self.albedo_texture.texels.iter().enumerate() {
+            let in_range = (0..3).all(|c| {
+                let albedo = self.albedo_scale[c] * value[c];
+                albedo.is_finite() && (0.0..=1.0).contains(&albedo) && self.albedo_scale[c] >= 0.0
+            });
+            if !in_range {
+                return Err(ShadingError::Albedo {
+                    scale: self.albedo_scale,
+                    texel,
+                });
+            }
+        }
+        if let Some(thickness) = &self.thickness_texture {
+            for (texel, value) in thickness.texels.iter().enumerate() {
+                if !(6.103_515_6e-5..=65504.0).contains(&value[0]) {
+                    return Err(ShadingError::Thickness {
+                        texel,
+                        value: value[0],
+                    });
+                }
+            }
+        }
+        if !(self.light_flux.is_finite() && self.light_flux >= 0.0) {
+            return Err(ShadingError::Flux(self.light_flux));
+        }
+        if !self.light_position.is_finite() {
+            return Err(ShadingError::LightPosition(self.light_position.to_array()));
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(ShadingError::Exposure(self.exposure));
+        }
+        if !(0.0..=1.0).contains(&self.baseline_transmittance) {
+            return Err(ShadingError::BaselineTransmittance(
+                self.baseline_transmittance,
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether τ1 is the same in all channels (then α is grey and blend factor SrcAlpha suffices).
+    pub fn grey_optical_thickness(&self) -> bool {
+        let [r, g, b] = self.optical_thickness;
+        r == g && g == b
+    }
+}
+
+/// What is drawn first, behind the slab.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Background {
+    /// Uniform linear radiance (W/(m²·sr)) per channel.
+    Uniform([f32; 3]),
+    /// A linear radiance image of exactly the render target's size (pixel-exact, no filtering).
+    Image(Texture2d),
+}
+
+/// A linear radiance image read back from the render target: rgb in W/(m²·sr), alpha = product of the
+/// transmittances α of the layers covering the pixel (1 where only background is seen).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major from the top row.
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl LinearImage {
+    /// The pixel at column `x`, row `y` (from the top).
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// 8-bit sRGB RGBA (alpha 255) of `radiance × exposure`, clamped to [0, 1] for display only.
+    pub fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
+        let mut bytes = Vec::with_capacity(self.pixels.len() * 4);
+        for pixel in &self.pixels {
+            for &channel in &pixel[..3] {
+                bytes.push(linear_to_srgb8(channel * exposure));
+            }
+            bytes.push(255);
+        }
+        bytes
+    }
+
+    /// Writes the sRGB rendering (see [`Self::to_srgb8`]) as a PNG.
+    pub fn save_png(&self, path: &Path, exposure: f32) -> Result<(), image::ImageError> {
+        image::save_buffer(
+            path,
+            &self.to_srgb8(exposure),
+            self.width,
+            self.height,
+            image::ExtendedColorType::Rgba8,
+        )
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a display value, clamped to [0, 1] (NaN → 0), to 8 bits.
+pub fn linear_to_srgb8(value: f32) -> u8 {
+    let v = if value.is_nan() {
+        0.0
+    } else {
+        value.clamp(0.0, 1.0)
+    };
+    let encoded = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (encoded * 255.0).round() as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_endpoints_and_midpoint() {
+        assert_eq!(linear_to_srgb8(0.0), 0);
+        assert_eq!(linear_to_srgb8(1.0), 255);
+        assert_eq!(linear_to_srgb8(2.0), 255);
+        assert_eq!(linear_to_srgb8(f32::NAN), 0);
+        // sRGB(0.5) = 0.7354 → 187.5 → 188.
+        assert_eq!(linear_to_srgb8(0.5), 188);
+    }
+
+    #[test]
+    fn mesh_validation_names_the_problem() {
+        let mut mesh = SlabMesh::flat_sheet(Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, 2, 2).unwrap();
+        assert_eq!(mesh.positions.len(), 9);
+        assert_eq!(mesh.indices.len(), 24);
+        mesh.indices[5] = 9;
+        assert_eq!(
+            mesh.validate(),
+            Err(MeshError::IndexOutOfRange {
+                index: 9,
+                position: 5,
+                vertices: 9
+            })
+        );
+        mesh.indices[5] = 0;
+        mesh.normals[3][1] = f32::NAN;
+        assert_eq!(
+            mesh.validate(),
+            Err(MeshError::NonFinite {
+                attribute: "normal",
+                vertex: 3
+            })
+        );
+        assert!(SlabMesh::flat_sheet(Vec3::ZERO, Vec3::X, Vec3::X, Vec3::Z, 1, 1).is_err());
+    }
+
+    #[test]
+    fn shading_validation() {
+        let mut params = ShadingParams::uniform(1.0, 0.5, Vec3::Z, 10.0).unwrap();
+        params.albedo_scale = [1.5, 0.5, 0.5];
+        assert!(matches!(
+            params.validate(),
+            Err(ShadingError::Albedo { .. })
+        ));
+        assert!(ShadingParams::uniform(0.0, 0.5, Vec3::Z, 10.0).is_err());
+        assert!(ShadingParams::uniform(1.0, 0.5, Vec3::Z, -1.0).is_err());
+    }
+
+    #[test]
+    fn pixel_ray_hits_the_target_at_the_centre() {
+        let camera = Camera {
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            vertical_fov: 0.8,
+            near: 0.1,
+            far: 10.0,
+        };
+        let (origin, direction) = camera.pixel_ray(32.0, 16.0, 64, 32);
+        assert!((origin - DVec3::new(0.0, 0.0, 3.0)).length() < 1e-12);
+        // Round trip through an f64 4×4 inverse: ~1e-15 relative per entry.
+        assert!((direction - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-12);
+    }
+}

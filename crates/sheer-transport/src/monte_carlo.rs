@@ -1,0 +1,201 @@
+//! Analog Monte Carlo photon transport through the same slab as [`crate::slab`]: exponential free paths
+//! in optical depth, absorption with probability `1 − Λ` at each interaction, isotropic re-emission.
+//! It shares no code with the deterministic solver, which makes it an independent check.
+//!
+//! Photons are counted into uniform bins of the emergent cosine μ on each face. A photon that leaves
+//! through the lit face in band `[μa, μb]` contributes flux `μ0 / N` (the beam delivers flux `μ0` per unit
+//! area for unit irradiance normal to it), so the binned flux estimates `2π ∫_{μa}^{μb} L(μ) μ dμ`.
+//! Counts are binomial, so a bin's standard error is `μ0 √(p(1−p)/N)` with `p` the fraction counted.
+//!
+//! Randomness: xoshiro256++ (Blackman & Vigna 2018) seeded per batch of photons through splitmix64, so
+//! results depend only on the seed and photon count, not on the number of rayon threads.
+
+use rayon::prelude::*;
+
+use crate::{Result, TransportError, validate};
+
+/// Photons per independently seeded batch (the unit of parallel work).
+const BATCH: u64 = 1 << 16;
+
+/// splitmix64 step (Steele, Lea & Flood 2014): seeds xoshiro from one 64-bit value.
+fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// xoshiro256++ generator.
+struct Xoshiro256PlusPlus {
+    state: [u64; 4],
+}
+
+impl Xoshiro256PlusPlus {
+    fn seeded(seed: u64) -> Self {
+        let mut s = seed;
+        Self {
+            state: [
+                splitmix64(&mut s),
+                splitmix64(&mut s),
+                splitmix64(&mut s),
+                splitmix64(&mut s),
+            ],
+        }
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        let s = &mut self.state;
+        let result = (s[0].wrapping_add(s[3])).rotate_left(23).wrapping_add(s[0]);
+        let t = s[1] << 17;
+        s[2] ^= s[0];
+        s[3] ^= s[1];
+        s[1] ^= s[2];
+        s[0] ^= s[3];
+        s[2] ^= t;
+        s[3] = s[3].rotate_left(45);
+        result
+    }
+
+    /// Uniform in [0, 1) with 53 random bits.
+    fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+/// Photon counts of one simulation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MonteCarloTally {
+    /// Photons launched.
+    pub photons: u64,
+    /// Incident cosine μ0 of the beam.
+    pub mu0: f64,
+    /// Scattered photons leaving the lit face, per uniform μ bin.
+    pub reflected: Vec<u64>,
+    /// Scattered photons leaving the unlit face, per uniform μ bin.
+    pub transmitted: Vec<u64>,
+    /// Photons crossing the slab without interacting.
+    pub direct: u64,
+    /// Photons absorbed.
+    pub absorbed: u64,
+}
+
+impl MonteCarloTally {
+    /// Number of μ bins on each face.
+    pub fn bins(&self) -> usize {
+        self.reflected.len()
+    }
+
+    /// The cosine band `[μa, μb]` of bin `index`.
+    pub fn bin_band(&self, index: usize) -> (f64, f64) {
+        let n = self.bins() as f64;
+        (index as f64 / n, (index + 1) as f64 / n)
+    }
+
+    /// Estimated flux and its standard error for `count` photons (per unit normal irradiance).
+    pub fn flux_with_error(&self, count: u64) -> (f64, f64) {
+        let p = count as f64 / self.photons as f64;
+        (
+            self.mu0 * p,
+            self.mu0 * (p * (1.0 - p) / self.photons as f64).sqrt(),
+        )
+    }
+}
+
+/// Launches `photons` photons at `mu0` ∈ (0, 1] into a slab of optical thickness `tau1` and albedo Λ,
+/// tallying emergent scattered photons into `bins` uniform μ bins per face. Deterministic in `seed`.
+pub fn simulate_photons(
+    tau1: f64,
+    albedo: f64,
+    mu0: f64,
+    photons: u64,
+    bins: usize,
+    seed: u64,
+) -> Result<MonteCarloTally> {
+    validate::optical_thickness(tau1)?;
+    validate::albedo(albedo)?;
+    validate::incident_cosine(mu0)?;
+    if photons == 0 || bins == 0 {
+        return Err(TransportError::PhotonCount);
+    }
+    let batches = photons.div_ceil(BATCH);
+    let partial: Vec<MonteCarloTally> = (0..batches)
+        .into_par_iter()
+        .map(|batch| {
+            let count = BATCH.min(photons - batch * BATCH);
+            let mut seed_state = seed ^ batch.wrapping_mul(0xd1b5_4a32_d192_ed03);
+            let mut rng = Xoshiro256PlusPlus::seeded(splitmix64(&mut seed_state));
+            simulate_batch(tau1, albedo, mu0, count, bins, &mut rng)
+        })
+        .collect();
+    let mut total = MonteCarloTally {
+        photons,
+        mu0,
+        reflected: vec![0; bins],
+        transmitted: vec![0; bins],
+        direct: 0,
+        absorbed: 0,
+    };
+    for part in partial {
+        for (sum, add) in total.reflected.iter_mut().zip(&part.reflected) {
+            *sum += add;
+        }
+        for (sum, add) in total.transmitted.iter_mut().zip(&part.transmitted) {
+            *sum += add;
+        }
+        total.direct += part.direct;
+        total.absorbed += part.absorbed;
+    }
+    Ok(total)
+}
+
+fn simulate_batch(
+    tau1: f64,
+    albedo: f64,
+    mu0: f64,
+    photons: u64,
+    bins: usize,
+    rng: &mut Xoshiro256PlusPlus,
+) -> MonteCarloTally {
+    let mut tally = MonteCarloTally {
+        photons,
+        mu0,
+        reflected: vec![0; bins],
+        transmitted: vec![0; bins],
+        direct: 0,
+        absorbed: 0,
+    };
+    let bin_of = |mu: f64| ((mu * bins as f64) as usize).min(bins - 1);
+    for _ in 0..photons {
+        // Depth below the lit face and direction cosine along +depth (into the slab).
+        let mut depth = 0.0;
+        let mut inward_cosine = mu0;
+        let mut scattered = false;
+        loop {
+            // 1 − U lies in (0, 1], so the logarithm is finite.
+            let path = -(1.0 - rng.uniform()).ln();
+            let next = depth + inward_cosine * path;
+            if next < 0.0 {
+                // Only a scattered photon can travel outwards.
+                tally.reflected[bin_of(-inward_cosine)] += 1;
+                break;
+            }
+            if next > tau1 {
+                if scattered {
+                    tally.transmitted[bin_of(inward_cosine)] += 1;
+                } else {
+                    tally.direct += 1;
+                }
+                break;
+            }
+            depth = next;
+            if rng.uniform() >= albedo {
+                tally.absorbed += 1;
+                break;
+            }
+            scattered = true;
+            inward_cosine = 2.0 * rng.uniform() - 1.0;
+        }
+    }
+    tally
+}

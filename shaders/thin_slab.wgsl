@@ -1,0 +1,238 @@
+// thin_slab.wgsl — the thin-slab shading model of Frisvad, Christensen & Falster (2005), eqs. (4)–(9),
+// for sheer-slab's headless renderer (crates/sheer-slab/src/render.rs), plus the traditional baseline
+// (diffuse BRDF, constant alpha 0.2) and the background pass.
+//
+// The Rust side prepends, in this order: one of `slab_output_single.wgsl` / `slab_output_dual.wgsl`
+// (which declare `SlabOutput` and `slab_output`, and for dual-source blending the `enable` directive that
+// must come first), then `lit_side.wgsl` (the lit-side rule: `LitSide`, `lit_side_cosines`).
+//
+// Units: positions in m, light flux in W, irradiance in W/m², radiance in W/(m²·sr). All radiance here is
+// linear; exposure and sRGB encoding happen after read-back.
+//
+// Blending (fixed-function, eq. 9): L_blended = L_dst · α_src + L_src, i.e. colour source factor One and
+// destination factor SrcAlpha (grey τ1) or Src1 (per-channel τ1 with dual-source blending).
+
+struct Frame {
+    view_projection: mat4x4<f32>,
+    // xyz: eye position (m).
+    eye: vec4<f32>,
+    // xyz: light position (m); w: flux Φ (W) of the isotropic point light.
+    light: vec4<f32>,
+    // rgb: optical thickness τ1 per channel; w: 1 if the thickness texture multiplies τ1, else 0.
+    optical_thickness: vec4<f32>,
+    // rgb: single-scattering albedo scale (multiplies the albedo texture); w: convention
+    // (0 = irradiance normal to the beam, 1 = paper-literal surface irradiance of eq. 6).
+    albedo_scale: vec4<f32>,
+    // rgb: uniform background radiance; w: 1 if the background texture is used instead.
+    background: vec4<f32>,
+    // x: the baseline's constant transmittance α (0.2 in the paper's figure 2).
+    baseline: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var albedo_texture: texture_2d<f32>;
+@group(0) @binding(2) var thickness_texture: texture_2d<f32>;
+@group(0) @binding(3) var linear_sampler: sampler;
+@group(0) @binding(4) var background_texture: texture_2d<f32>;
+
+const PI: f32 = 3.14159265358979;
+// Cosines below this are treated as this (grazing guard): WGSL may assume no infinities at run time, so
+// τ1/μ must stay finite. At μ = 1e-6 the model equals its μ → 0 limit to f32 precision for μ0 ≫ 1e-6.
+const COSINE_FLOOR: f32 = 1e-6;
+
+// Set per pipeline: true when τ1 differs between channels (then the model runs three times).
+override per_channel_thickness: bool = false;
+
+// φ(d) = (1 − e^{−d})/d = Σ (−d)^k/(k+1)! for 0 ≤ d ≤ 1, by Horner with the coefficients (−1)^k/(k+1)!
+// (multiplications only: divisions by constants would stay divisions without fast-math); stopping after
+// d^11/12! leaves an error below 1/13! < 2e-10, far under f32 precision. φ(0) = 1 exactly.
+fn phi_series(d: f32) -> f32 {
+    return 1.0 + d * (-0.5 + d * (0.166666667 + d * (-0.0416666667 + d * (0.00833333333
+        + d * (-0.00138888889 + d * (0.000198412698 + d * (-2.48015873e-05 + d * (2.75573192e-06
+        + d * (-2.75573192e-07 + d * (2.50521084e-08 + d * (-2.08767570e-09)))))))))));
+}
+
+// The model for one channel without Λ/(4π)·E: (eq. 4 shape, eq. 5 shape, α). Branch-free (selects), two
+// exponentials shared by all three; every difference of exponentials is taken only where it loses at most
+// log2(1/(1 − e^{−1})) = 0.66 bits, the Taylor series of φ covering the rest:
+//   α = e^{−τ1/μ}, e0 = e^{−τ1/μ0};
+//   eq. (4): μ0/(μ+μ0)·(1 − e^{−x}), x = τ1/μ + τ1/μ0, with 1 − e^{−x} = 1 − α·e0 (x ≥ 1) or x·φ(x);
+//   eq. (5): with M, m = max, min of μ, μ0, e_M = e^{−τ1/M}, e_m = e^{−τ1/m}, d = (τ1/m)(1 − m/M)
+//     = τ1|μ−μ0|/(μμ0):  d < 1: (τ1/μ)·e_M·φ(d)  (the exact limit (τ1/μ)e^{−τ1/μ} at μ = μ0);
+//                        d ≥ 1: μ0/(M−m)·(e_M − e_m)  (the paper's form, where it is well conditioned).
+fn slab_shapes(tau: f32, mu0: f32, mu: f32) -> vec3<f32> {
+    let tau_over_mu = tau / mu;
+    let tau_over_mu0 = tau / mu0;
+    let alpha = exp(-tau_over_mu);
+    let lit_attenuation = exp(-tau_over_mu0);
+    let x = tau_over_mu + tau_over_mu0;
+    let one_minus_exp = select(1.0 - alpha * lit_attenuation, x * phi_series(min(x, 1.0)), x < 1.0);
+    let reflected = mu0 / (mu + mu0) * one_minus_exp;
+    let larger = max(mu, mu0);
+    let smaller = min(mu, mu0);
+    let eye_larger = mu >= mu0;
+    let e_larger = select(lit_attenuation, alpha, eye_larger);
+    let e_smaller = select(alpha, lit_attenuation, eye_larger);
+    let d = (tau / smaller) * ((larger - smaller) / larger);
+    let near_diagonal = tau_over_mu * e_larger * phi_series(min(d, 1.0));
+    // max(): keeps the unused select operand finite at μ = μ0.
+    let off_diagonal = mu0 / max(larger - smaller, 1e-30) * (e_larger - e_smaller);
+    let transmitted = select(off_diagonal, near_diagonal, d < 1.0);
+    return vec3<f32>(reflected, transmitted, alpha);
+}
+
+struct SlabValues {
+    // L± per unit albedo (W/(m²·sr)): the single-scattered radiance for Λ = 1.
+    radiance_per_albedo: vec3<f32>,
+    // α = e^{−τ1/μ} per channel.
+    transmittance: vec3<f32>,
+}
+
+// The model at one point: lit-side rule, point-light irradiance, eqs. (4)/(5) per channel and α.
+fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>) -> SlabValues {
+    let to_light = frame.light.xyz - position;
+    let side = lit_side_cosines(normal, to_light, frame.eye.xyz - position);
+    let mu = max(side.mu, COSINE_FLOOR);
+    let mu0 = max(side.mu0, COSINE_FLOOR);
+    // Irradiance normal to the beam Φ/(4πr²); eq. (6)'s surface irradiance multiplies it by μ0. A light
+    // grazing the surface (μ0 = 0) delivers nothing: the μ0 → 0 limit of eqs. (4)–(5) is 0.
+    let received = select(0.0, 1.0, side.mu0 > 0.0);
+    let convention_factor = select(1.0, mu0, frame.albedo_scale.w > 0.5);
+    let irradiance = received * convention_factor * frame.light.w / (4.0 * PI * dot(to_light, to_light));
+    var reflected: vec3<f32>;
+    var transmitted: vec3<f32>;
+    var transmittance: vec3<f32>;
+    if per_channel_thickness {
+        let red = slab_shapes(tau.r, mu0, mu);
+        let green = slab_shapes(tau.g, mu0, mu);
+        let blue = slab_shapes(tau.b, mu0, mu);
+        reflected = vec3<f32>(red.x, green.x, blue.x);
+        transmitted = vec3<f32>(red.y, green.y, blue.y);
+        transmittance = vec3<f32>(red.z, green.z, blue.z);
+    } else {
+        let grey = slab_shapes(tau.r, mu0, mu);
+        reflected = vec3<f32>(grey.x);
+        transmitted = vec3<f32>(grey.y);
+        transmittance = vec3<f32>(grey.z);
+    }
+    let shape = select(transmitted, reflected, side.eye_on_lit_side);
+    return SlabValues(shape * (irradiance / (4.0 * PI)), transmittance);
+}
+
+// τ1 per channel at uv; the thickness texture is only sampled when present (a uniform branch).
+fn optical_thickness_at(uv: vec2<f32>) -> vec3<f32> {
+    if frame.optical_thickness.w > 0.5 {
+        return frame.optical_thickness.rgb * textureSample(thickness_texture, linear_sampler, uv).r;
+    }
+    return frame.optical_thickness.rgb;
+}
+
+// As `optical_thickness_at`, for the vertex stage (explicit level 0).
+fn optical_thickness_at_vertex(uv: vec2<f32>) -> vec3<f32> {
+    if frame.optical_thickness.w > 0.5 {
+        return frame.optical_thickness.rgb * textureSampleLevel(thickness_texture, linear_sampler, uv, 0.0).r;
+    }
+    return frame.optical_thickness.rgb;
+}
+
+fn albedo_at(uv: vec2<f32>) -> vec3<f32> {
+    return frame.albedo_scale.rgb * textureSample(albedo_texture, linear_sampler, uv).rgb;
+}
+
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+}
+
+// ---- per fragment -------------------------------------------------------------------------------------
+
+struct FragmentPathVarying {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+}
+
+@vertex
+fn vs_per_fragment(input: VertexInput) -> FragmentPathVarying {
+    return FragmentPathVarying(frame.view_projection * vec4<f32>(input.position, 1.0), input.position,
+        input.normal, input.uv);
+}
+
+@fragment
+fn fs_per_fragment(input: FragmentPathVarying) -> SlabOutput {
+    let tau = optical_thickness_at(input.uv);
+    let values = slab_values(input.world_position, input.normal, tau);
+    return slab_output(albedo_at(input.uv) * values.radiance_per_albedo, values.transmittance);
+}
+
+// ---- per vertex (vertex shader) and on the CPU (per vertex, uploaded) ---------------------------------
+
+struct InterpolatedVarying {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) radiance_per_albedo: vec3<f32>,
+    @location(1) transmittance: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+}
+
+@vertex
+fn vs_per_vertex(input: VertexInput) -> InterpolatedVarying {
+    let tau = optical_thickness_at_vertex(input.uv);
+    let values = slab_values(input.position, input.normal, tau);
+    return InterpolatedVarying(frame.view_projection * vec4<f32>(input.position, 1.0),
+        values.radiance_per_albedo, values.transmittance, input.uv);
+}
+
+struct CpuVertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) radiance_per_albedo: vec3<f32>,
+    @location(4) transmittance: vec3<f32>,
+}
+
+@vertex
+fn vs_cpu(input: CpuVertexInput) -> InterpolatedVarying {
+    return InterpolatedVarying(frame.view_projection * vec4<f32>(input.position, 1.0),
+        input.radiance_per_albedo, input.transmittance, input.uv);
+}
+
+// Λ enters eqs. (4)–(5) linearly, so the albedo texture is applied per fragment in both per-vertex paths.
+@fragment
+fn fs_interpolated(input: InterpolatedVarying) -> SlabOutput {
+    return slab_output(albedo_at(input.uv) * input.radiance_per_albedo, input.transmittance);
+}
+
+// ---- baseline: diffuse BRDF ρ/π and constant α; the back-lit side is black ----------------------------
+
+@fragment
+fn fs_baseline(input: FragmentPathVarying) -> SlabOutput {
+    let to_light = frame.light.xyz - input.world_position;
+    let side = lit_side_cosines(input.normal, to_light, frame.eye.xyz - input.world_position);
+    var radiance = vec3<f32>(0.0);
+    if side.eye_on_lit_side {
+        // Lambertian: L = (ρ/π)·E_surface, E_surface = Φμ0/(4πr²) (eq. 6).
+        let irradiance = frame.light.w * side.mu0 / (4.0 * PI * dot(to_light, to_light));
+        radiance = albedo_at(input.uv) * (irradiance / PI);
+    }
+    return slab_output(radiance, vec3<f32>(frame.baseline.x));
+}
+
+// ---- background: a full-screen triangle, uniform colour or an image of the target's size -------------
+
+@vertex
+fn vs_background(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let x = f32(i32(index & 1u) * 4 - 1);
+    let y = f32(i32(index >> 1u) * 4 - 1);
+    return vec4<f32>(x, y, 0.0, 1.0);
+}
+
+@fragment
+fn fs_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
+    if frame.background.w > 0.5 {
+        // Alpha 1: the target's alpha channel accumulates the product of α over the layers drawn on top.
+        return vec4<f32>(textureLoad(background_texture, vec2<i32>(pixel.xy), 0).rgb, 1.0);
+    }
+    return vec4<f32>(frame.background.rgb, 1.0);
+}
