@@ -79,16 +79,13 @@ fn scaling(c: &mut Criterion) {
                 Method::SmallStepsXpbd { substeps: 20 },
                 threshold,
             );
-            group.bench_function(
-                BenchmarkId::new(label, format!("{columns}x{rows}")),
-                |b| {
-                    b.iter(|| {
-                        if sim.step(FRAME).is_err() {
-                            sim.reset();
-                        }
-                    })
-                },
-            );
+            group.bench_function(BenchmarkId::new(label, format!("{columns}x{rows}")), |b| {
+                b.iter(|| {
+                    if sim.step(FRAME).is_err() {
+                        sim.reset();
+                    }
+                })
+            });
         }
     }
     group.finish();

@@ -15,7 +15,9 @@ pub enum ModelError {
     EmptyMesh,
     #[error("the index list has {0} entries, not a multiple of 3")]
     IndexCountNotMultipleOf3(usize),
-    #[error("triangle {triangle} refers to vertex {index}, but there are only {vertex_count} vertices")]
+    #[error(
+        "triangle {triangle} refers to vertex {index}, but there are only {vertex_count} vertices"
+    )]
     IndexOutOfRange {
         triangle: usize,
         index: u32,
@@ -29,7 +31,9 @@ pub enum ModelError {
     MasslessParticle(usize),
     #[error("pin index {index} is out of range (the cloth has {particle_count} particles)")]
     PinOutOfRange { index: usize, particle_count: usize },
-    #[error("spring {spring} joins particle {index}, but there are only {particle_count} particles")]
+    #[error(
+        "spring {spring} joins particle {index}, but there are only {particle_count} particles"
+    )]
     SpringOutOfRange {
         spring: usize,
         index: u32,
@@ -87,8 +91,5 @@ pub enum StepError {
     #[error("time step must be finite and > 0 s, got {0}")]
     InvalidTimeStep(f64),
     #[error("step {step} diverged: {reason}; the last good state was kept")]
-    Diverged {
-        step: u64,
-        reason: DivergenceReason,
-    },
+    Diverged { step: u64, reason: DivergenceReason },
 }

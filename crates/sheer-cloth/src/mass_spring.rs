@@ -34,10 +34,15 @@ impl Simulation {
         self.compute_forces(t, true);
         let parallel = self.parallel();
         let (forces, inverse_masses) = (&self.forces, &self.inverse_masses);
-        update_particles(&mut self.positions, &mut self.velocities, parallel, |i, x, v| {
-            *x += h * *v;
-            *v += h * inverse_masses[i] * forces[i];
-        });
+        update_particles(
+            &mut self.positions,
+            &mut self.velocities,
+            parallel,
+            |i, x, v| {
+                *x += h * *v;
+                *v += h * inverse_masses[i] * forces[i];
+            },
+        );
         self.cached_forces_valid = false;
     }
 
@@ -46,10 +51,15 @@ impl Simulation {
         self.compute_forces(t, true);
         let parallel = self.parallel();
         let (forces, inverse_masses) = (&self.forces, &self.inverse_masses);
-        update_particles(&mut self.positions, &mut self.velocities, parallel, |i, x, v| {
-            *v += h * inverse_masses[i] * forces[i];
-            *x += h * *v;
-        });
+        update_particles(
+            &mut self.positions,
+            &mut self.velocities,
+            parallel,
+            |i, x, v| {
+                *v += h * inverse_masses[i] * forces[i];
+                *x += h * *v;
+            },
+        );
         self.cached_forces_valid = false;
     }
 
@@ -63,16 +73,26 @@ impl Simulation {
         let parallel = self.parallel();
         {
             let (forces, inverse_masses) = (&self.forces, &self.inverse_masses);
-            update_particles(&mut self.positions, &mut self.velocities, parallel, |i, x, v| {
-                *v += 0.5 * h * inverse_masses[i] * forces[i];
-                *x += h * *v;
-            });
+            update_particles(
+                &mut self.positions,
+                &mut self.velocities,
+                parallel,
+                |i, x, v| {
+                    *v += 0.5 * h * inverse_masses[i] * forces[i];
+                    *x += h * *v;
+                },
+            );
         }
         self.compute_forces(t + h, true);
         let (forces, inverse_masses) = (&self.forces, &self.inverse_masses);
-        update_particles(&mut self.positions, &mut self.velocities, parallel, |i, _, v| {
-            *v += 0.5 * h * inverse_masses[i] * forces[i];
-        });
+        update_particles(
+            &mut self.positions,
+            &mut self.velocities,
+            parallel,
+            |i, _, v| {
+                *v += 0.5 * h * inverse_masses[i] * forces[i];
+            },
+        );
         self.cached_forces_valid = true;
     }
 
@@ -148,8 +168,7 @@ impl Simulation {
                 let axial = DMat3::from_cols(u * u.x, u * u.y, u * u.z);
                 let transverse = (1.0 - sp.rest_length / length).max(0.0);
                 // ∂f_a/∂x_a = −k [u uᵀ + (1 − L/l)⁺ (I − u uᵀ)];  ∂f_a/∂v_a = −c u uᵀ.
-                let stiffness_block =
-                    -stiffness * (axial + transverse * (DMat3::IDENTITY - axial));
+                let stiffness_block = -stiffness * (axial + transverse * (DMat3::IDENTITY - axial));
                 let system_block = h * damping * axial - h * h * stiffness_block;
                 (
                     system_block,

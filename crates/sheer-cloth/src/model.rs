@@ -155,13 +155,28 @@ impl ClothModel {
             for column in 0..columns {
                 let here = shape.index(row, column);
                 if column + 1 < columns {
-                    add(here, shape.index(row, column + 1), SpringKind::Stretch, &positions);
+                    add(
+                        here,
+                        shape.index(row, column + 1),
+                        SpringKind::Stretch,
+                        &positions,
+                    );
                 }
                 if row + 1 < rows {
-                    add(here, shape.index(row + 1, column), SpringKind::Stretch, &positions);
+                    add(
+                        here,
+                        shape.index(row + 1, column),
+                        SpringKind::Stretch,
+                        &positions,
+                    );
                 }
                 if column + 1 < columns && row + 1 < rows {
-                    add(here, shape.index(row + 1, column + 1), SpringKind::Shear, &positions);
+                    add(
+                        here,
+                        shape.index(row + 1, column + 1),
+                        SpringKind::Shear,
+                        &positions,
+                    );
                     add(
                         shape.index(row, column + 1),
                         shape.index(row + 1, column),
@@ -170,10 +185,20 @@ impl ClothModel {
                     );
                 }
                 if column + 2 < columns {
-                    add(here, shape.index(row, column + 2), SpringKind::Bend, &positions);
+                    add(
+                        here,
+                        shape.index(row, column + 2),
+                        SpringKind::Bend,
+                        &positions,
+                    );
                 }
                 if row + 2 < rows {
-                    add(here, shape.index(row + 2, column), SpringKind::Bend, &positions);
+                    add(
+                        here,
+                        shape.index(row + 2, column),
+                        SpringKind::Bend,
+                        &positions,
+                    );
                 }
             }
         }
@@ -199,7 +224,7 @@ impl ClothModel {
         if indices.is_empty() || positions.is_empty() {
             return Err(ModelError::EmptyMesh);
         }
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(ModelError::IndexCountNotMultipleOf3(indices.len()));
         }
         check_density(areal_density)?;
@@ -400,7 +425,8 @@ fn lumped_masses(
             .length_squared()
             .max((pc - pb).length_squared())
             .max((pa - pc).length_squared());
-        if !(area > 1e-9 * longest) || a == b || b == c || a == c {
+        let healthy = area > 1e-9 * longest; // false for NaN too
+        if !healthy || a == b || b == c || a == c {
             return Err(ModelError::DegenerateTriangle { triangle: t, area });
         }
         for i in [a, b, c] {

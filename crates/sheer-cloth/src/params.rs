@@ -116,7 +116,11 @@ impl Method {
 
     fn validate(&self) -> Result<(), ParamError> {
         if self.substeps() == 0 {
-            return Err(ParamError::new("method.substeps", 0.0, "must be at least 1"));
+            return Err(ParamError::new(
+                "method.substeps",
+                0.0,
+                "must be at least 1",
+            ));
         }
         match *self {
             Method::ImplicitEuler {
@@ -139,7 +143,11 @@ impl Method {
                 ..
             } => {
                 if iterations == 0 {
-                    return Err(ParamError::new("method.iterations", 0.0, "must be at least 1"));
+                    return Err(ParamError::new(
+                        "method.iterations",
+                        0.0,
+                        "must be at least 1",
+                    ));
                 }
                 if !(stiffness > 0.0 && stiffness <= 1.0) {
                     return Err(ParamError::new(
@@ -149,8 +157,12 @@ impl Method {
                     ));
                 }
             }
-            Method::Xpbd { iterations, .. } if iterations == 0 => {
-                return Err(ParamError::new("method.iterations", 0.0, "must be at least 1"));
+            Method::Xpbd { iterations: 0, .. } => {
+                return Err(ParamError::new(
+                    "method.iterations",
+                    0.0,
+                    "must be at least 1",
+                ));
             }
             _ => {}
         }
@@ -259,7 +271,8 @@ impl Default for Wind {
 impl Wind {
     /// Whether the wind can exert any force (a zero mean velocity with no gusts does nothing).
     pub fn is_active(&self) -> bool {
-        self.velocity != DVec3::ZERO && (self.drag_coefficient != 0.0 || self.lift_coefficient != 0.0)
+        self.velocity != DVec3::ZERO
+            && (self.drag_coefficient != 0.0 || self.lift_coefficient != 0.0)
     }
 
     fn validate(&self) -> Result<(), ParamError> {

@@ -12,6 +12,21 @@ use rayon::prelude::*;
 use crate::parallel::{DisjointSlice, fill};
 use crate::sim::{Simulation, family_index};
 
+/// One distance constraint with everything its update reads, in one cache line: the solver streams
+/// through these in colour order. Rebuilt when the sub-step length or the parameters change.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PackedConstraint {
+    a: u32,
+    b: u32,
+    rest_length: f64,
+    inverse_mass_a: f64,
+    inverse_mass_b: f64,
+    /// PBD: k'/(w_a + w_b); XPBD: 1/((1 + γ)(w_a + w_b) + α̃); 0 when the constraint is inactive.
+    inverse_denominator: f64,
+    scaled_compliance: f64,
+    gamma: f64,
+}
+
 /// Batches smaller than this run on one thread even in parallel mode: rayon's fork–join costs more.
 const MIN_PARALLEL_BATCH: usize = 2048;
 
@@ -96,20 +111,31 @@ impl Simulation {
             let Simulation {
                 springs,
                 inverse_masses,
-                inverse_denominators,
+                packed,
                 ..
             } = self;
-            inverse_denominators.resize(springs.len(), 0.0);
-            fill(inverse_denominators, parallel, |c| {
+            packed.resize(springs.len(), PackedConstraint::default());
+            fill(packed, parallel, |c| {
                 let sp = &springs[c];
                 let (scale, scaled_compliance, gamma) = constants[family_index(sp.kind)];
-                let w = inverse_masses[sp.a as usize] + inverse_masses[sp.b as usize];
-                if scale == 0.0 || w == 0.0 {
+                let (wa, wb) = (inverse_masses[sp.a as usize], inverse_masses[sp.b as usize]);
+                let w = wa + wb;
+                let inverse_denominator = if scale == 0.0 || w == 0.0 {
                     0.0
                 } else if is_pbd {
                     scale / w
                 } else {
                     1.0 / ((1.0 + gamma) * w + scaled_compliance)
+                };
+                PackedConstraint {
+                    a: sp.a,
+                    b: sp.b,
+                    rest_length: sp.rest_length,
+                    inverse_mass_a: wa,
+                    inverse_mass_b: wb,
+                    inverse_denominator,
+                    scaled_compliance,
+                    gamma,
                 }
             });
             self.denominator_key = Some(key);
@@ -117,12 +143,10 @@ impl Simulation {
         let Simulation {
             positions,
             previous_positions,
-            inverse_masses,
-            springs,
             colours,
             uncoloured,
             lambdas,
-            inverse_denominators,
+            packed,
             tethers,
             pinned_indices,
             params,
@@ -132,14 +156,13 @@ impl Simulation {
         let positions = DisjointSlice::new(positions);
         let lambdas = DisjointSlice::new(lambdas);
         let previous = &previous_positions[..];
-        let inverse_denominators = &inverse_denominators[..];
+        let packed = &packed[..];
         let solve = |c: usize| {
-            let inverse_denominator = inverse_denominators[c];
-            if inverse_denominator == 0.0 {
+            let k = &packed[c];
+            if k.inverse_denominator == 0.0 {
                 return; // switched-off family or both ends pinned
             }
-            let sp = &springs[c];
-            let (a, b) = (sp.a as usize, sp.b as usize);
+            let (a, b) = (k.a as usize, k.b as usize);
             // SAFETY: the colouring puts no two springs sharing a particle in one batch, and each spring
             // owns its multiplier, so no index is touched by two threads at once.
             let (xa, xb) = unsafe { (positions.get(a), positions.get(b)) };
@@ -149,30 +172,33 @@ impl Simulation {
                 return; // coincident ends: no gradient direction
             }
             let gradient = delta * (1.0 / length);
-            let constraint = length - sp.rest_length;
+            let constraint = length - k.rest_length;
             let correction = if is_pbd {
-                -constraint * inverse_denominator
+                -constraint * k.inverse_denominator
             } else {
-                let (_, scaled_compliance, gamma) = constants[family_index(sp.kind)];
                 let rate = gradient.dot((xa - previous[a]) - (xb - previous[b]));
                 // SAFETY: see above.
                 let lambda = unsafe { lambdas.get(c) };
-                let delta_lambda =
-                    (-constraint - scaled_compliance * lambda - gamma * rate) * inverse_denominator;
+                let delta_lambda = (-constraint - k.scaled_compliance * lambda - k.gamma * rate)
+                    * k.inverse_denominator;
                 unsafe { lambdas.set(c, lambda + delta_lambda) };
                 delta_lambda
             };
-            let (wa, wb) = (inverse_masses[a], inverse_masses[b]);
+            let step = correction * gradient;
             // SAFETY: see above.
             unsafe {
-                positions.set(a, xa + wa * correction * gradient);
-                positions.set(b, xb - wb * correction * gradient);
+                positions.set(a, xa + k.inverse_mass_a * step);
+                positions.set(b, xb - k.inverse_mass_b * step);
             }
         };
         for _ in 0..iterations {
             for range in colours.iter() {
                 if parallel && range.len() >= MIN_PARALLEL_BATCH {
-                    range.clone().into_par_iter().with_min_len(256).for_each(solve);
+                    range
+                        .clone()
+                        .into_par_iter()
+                        .with_min_len(256)
+                        .for_each(solve);
                 } else {
                     range.clone().for_each(solve);
                 }
@@ -185,7 +211,8 @@ impl Simulation {
                         let anchor_index = pinned_indices[k as usize] as usize;
                         // SAFETY: tether i writes only particle i, and reads a pinned particle, which
                         // no tether writes.
-                        let (x, anchor) = unsafe { (positions.get(i), positions.get(anchor_index)) };
+                        let (x, anchor) =
+                            unsafe { (positions.get(i), positions.get(anchor_index)) };
                         let offset = x - anchor;
                         let distance = offset.length();
                         if distance > rest {
@@ -194,7 +221,10 @@ impl Simulation {
                     }
                 };
                 if parallel {
-                    (0..tethers.len()).into_par_iter().with_min_len(1024).for_each(tether);
+                    (0..tethers.len())
+                        .into_par_iter()
+                        .with_min_len(1024)
+                        .for_each(tether);
                 } else {
                     (0..tethers.len()).for_each(tether);
                 }

@@ -35,6 +35,9 @@ pub struct StepInfo {
     pub cg_relative_residual: f64,
 }
 
+/// What the packed constraints were built for: sub-step length, per-family (scale, α̃, γ), PBD or not.
+pub(crate) type SolverKey = (f64, [(f64, f64, f64); 3], bool);
+
 /// Summary of spring strains (dimensionless).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StrainStatistics {
@@ -137,9 +140,9 @@ pub struct Simulation {
     /// The held aerodynamic forces must be recomputed (start of a step, or every sub-step).
     pub(crate) wind_stale: bool,
     pub(crate) cg: CgScratch,
-    /// Position-based solvers: per-constraint inverse divisors, valid for `denominator_key`.
-    pub(crate) inverse_denominators: Vec<f64>,
-    pub(crate) denominator_key: Option<(f64, [(f64, f64, f64); 3], bool)>,
+    /// Position-based solvers: the constraints with their per-step constants, valid for `denominator_key`.
+    pub(crate) packed: Vec<crate::position_based::PackedConstraint>,
+    pub(crate) denominator_key: Option<SolverKey>,
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -158,7 +161,11 @@ fn family_coefficients(params: &SimParams) -> [(f64, f64); 3] {
             (0.0, 0.0)
         }
     };
-    [pick(&params.stretch), pick(&params.shear), pick(&params.bend)]
+    [
+        pick(&params.stretch),
+        pick(&params.shear),
+        pick(&params.bend),
+    ]
 }
 
 /// Greedy colouring: each spring gets the lowest colour used by neither of its particles. Springs that
@@ -257,7 +264,12 @@ impl Simulation {
                 pinned_indices
                     .iter()
                     .enumerate()
-                    .map(|(k, &p)| (k as u32, model.positions[i].distance(model.positions[p as usize])))
+                    .map(|(k, &p)| {
+                        (
+                            k as u32,
+                            model.positions[i].distance(model.positions[p as usize]),
+                        )
+                    })
                     .min_by(|x, y| x.1.total_cmp(&y.1))
             })
             .collect();
@@ -293,7 +305,7 @@ impl Simulation {
             cached_forces_valid: false,
             wind_stale: true,
             cg: CgScratch::default(),
-            inverse_denominators: Vec::new(),
+            packed: Vec::new(),
             denominator_key: None,
         })
     }
@@ -411,29 +423,61 @@ impl Simulation {
             ..
         } = self;
         let (positions, velocities) = (&positions[..], &velocities[..]);
+        let wind_active = params.wind.is_active() && !triangles.is_empty();
+        let refresh_wind = wind_active && (*wind_stale || params.wind.per_substep);
+        let air_velocity = wind.air_velocity(time);
+        let wind_params = *wind.params();
+        let triangle_force = |t: usize| {
+            let [a, b, c] = triangles[t].map(|i| i as usize);
+            let area_normal = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+            let velocity = (velocities[a] + velocities[b] + velocities[c]) / 3.0;
+            aerodynamic_force(&wind_params, area_normal, velocity, air_velocity) / 3.0
+        };
+        let gravity = params.gravity;
+        let air_damping = params.air_damping;
+        let body_force = |i: usize| masses[i] * (gravity - air_damping * velocities[i]);
+        if refresh_wind {
+            *wind_stale = false;
+        }
+        if !parallel {
+            // One thread: scatter-add in element order. Each particle receives its terms in the same
+            // order as the parallel gather below (springs, then triangles, each ascending), so both
+            // paths give identical bits; the scatter just skips the extra pass.
+            for (i, f) in forces.iter_mut().enumerate() {
+                *f = body_force(i);
+            }
+            if with_springs {
+                for (spring, stored) in springs.iter().zip(spring_forces.iter_mut()) {
+                    let f = spring_force_on_a(spring, family, positions, velocities);
+                    *stored = f;
+                    forces[spring.a as usize] += f;
+                    forces[spring.b as usize] += -f;
+                }
+            }
+            if wind_active {
+                for (t, tri) in triangles.iter().enumerate() {
+                    if refresh_wind {
+                        triangle_forces[t] = triangle_force(t);
+                    }
+                    let f = triangle_forces[t];
+                    for &v in tri {
+                        forces[v as usize] += f;
+                    }
+                }
+            }
+            return;
+        }
         if with_springs {
             fill(spring_forces, parallel, |s| {
                 spring_force_on_a(&springs[s], family, positions, velocities)
             });
         }
-        let wind_active = params.wind.is_active() && !triangles.is_empty();
-        if wind_active && (*wind_stale || params.wind.per_substep) {
-            *wind_stale = false;
-            let air_velocity = wind.air_velocity(time);
-            let wind_params = *wind.params();
-            fill(triangle_forces, parallel, |t| {
-                let [a, b, c] = triangles[t].map(|i| i as usize);
-                let area_normal =
-                    (positions[b] - positions[a]).cross(positions[c] - positions[a]);
-                let velocity = (velocities[a] + velocities[b] + velocities[c]) / 3.0;
-                aerodynamic_force(&wind_params, area_normal, velocity, air_velocity) / 3.0
-            });
+        if refresh_wind {
+            fill(triangle_forces, parallel, triangle_force);
         }
-        let gravity = params.gravity;
-        let air_damping = params.air_damping;
         let (spring_forces, triangle_forces) = (&spring_forces[..], &triangle_forces[..]);
         fill(forces, parallel, |i| {
-            let mut force = masses[i] * (gravity - air_damping * velocities[i]);
+            let mut force = body_force(i);
             if with_springs {
                 for &item in spring_incidence.of(i) {
                     let f = spring_forces[(item >> 1) as usize];
@@ -573,7 +617,11 @@ impl Simulation {
 
     /// Replaces positions and velocities (for tests, studies and restarts). Pinned particles keep their
     /// new positions as pin targets.
-    pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) -> Result<(), ModelError> {
+    pub fn set_state(
+        &mut self,
+        positions: &[DVec3],
+        velocities: &[DVec3],
+    ) -> Result<(), ModelError> {
         let n = self.positions.len();
         if positions.len() != n || velocities.len() != n {
             return Err(ModelError::InvalidDimension {

@@ -101,8 +101,8 @@ impl WindField {
         }
         if self.params.turbulence != 0.0 {
             let lateral = self.params.turbulence * speed;
-            velocity += lateral
-                * (self.across[0].value(time) * e1 + self.across[1].value(time) * e2);
+            velocity +=
+                lateral * (self.across[0].value(time) * e1 + self.across[1].value(time) * e2);
         }
         velocity
     }

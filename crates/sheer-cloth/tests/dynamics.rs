@@ -91,7 +91,11 @@ fn unstressed_cloth_falls_as_half_g_t_squared() {
             _ => 1e-12,
         };
         let strain = sim.max_strain(None).abs();
-        assert!(strain < strain_tolerance, "{}: strain {strain}", method.name());
+        assert!(
+            strain < strain_tolerance,
+            "{}: strain {strain}",
+            method.name()
+        );
     }
 }
 
@@ -167,7 +171,8 @@ fn hanging_cloth_settles_and_stays_at_rest() {
             ..quiet(method)
         };
         let defaults = SimParams::default();
-        (params.stretch, params.shear, params.bend) = (defaults.stretch, defaults.shear, defaults.bend);
+        (params.stretch, params.shear, params.bend) =
+            (defaults.stretch, defaults.shear, defaults.bend);
         let mut sim = Simulation::new(model, params).unwrap();
         let h = 1.0 / 60.0;
         for _ in 0..600 {
@@ -191,11 +196,22 @@ fn hanging_cloth_settles_and_stays_at_rest() {
             .fold(0.0, f64::max);
         // At rest: no particle moves faster than 0.1 mm/s (the sag itself is centimetres) and none
         // creeps more than 10 µm over two further seconds.
-        assert!(max_speed < 1e-4, "{}: jitter {max_speed} m/s", method.name());
+        assert!(
+            max_speed < 1e-4,
+            "{}: jitter {max_speed} m/s",
+            method.name()
+        );
         assert!(creep < 1e-5, "{}: creep {creep} m", method.name());
-        // It did sag under gravity.
+        // It hangs where statics puts it: the springs (1000 N/m, ten in series per column carrying up
+        // to 11 mg of 2.5 g each) stretch about a millimetre; with long-range attachments (the
+        // position-based default) the tethers hold every particle within its rest distance of the
+        // pinned edge, so it cannot sag below rest at all.
         let bottom = spec.columns * (spec.rows - 1);
-        assert!(sim.positions()[bottom].y < sim.rest_positions()[bottom].y - 1e-4);
+        let sag = sim.rest_positions()[bottom].y - sim.positions()[bottom].y;
+        match method {
+            Method::ImplicitEuler { .. } => assert!(sag > 1e-4 && sag < 1e-2, "sag {sag}"),
+            _ => assert!(sag.abs() < 1e-6, "sag {sag}"),
+        }
     }
 }
 
@@ -242,7 +258,8 @@ fn transverse_waves_travel_at_sqrt_tension_over_linear_density() {
     let period = mean_period(&upward_zero_crossings(&times, &signal));
     let measured_omega = 2.0 * PI / period;
     // The bead string's dispersion relation: ω = 2 sqrt(T/(m a)) sin(κa/2), κ = π/L.
-    let discrete_omega = 2.0 * (tension / (mass * spacing)).sqrt() * (PI * spacing / (2.0 * length)).sin();
+    let discrete_omega =
+        2.0 * (tension / (mass * spacing)).sqrt() * (PI * spacing / (2.0 * length)).sin();
     // Continuum: ω = c κ with c = sqrt(T/ρ).
     let wave_speed = (tension / density).sqrt();
     let continuum_omega = wave_speed * PI / length;

@@ -55,7 +55,11 @@ fn bits(sim: &Simulation) -> Vec<[u64; 3]> {
 #[test]
 fn identical_bits_on_one_two_and_four_threads() {
     for method in stable_methods() {
-        let frames = if matches!(method, Method::ExplicitEuler { .. }) { 3 } else { 10 };
+        let frames = if matches!(method, Method::ExplicitEuler { .. }) {
+            3
+        } else {
+            10
+        };
         let run = |threads: usize, parallel_min_particles: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -89,7 +93,10 @@ fn realistic_fabric_flag_runs_at_60_hz_with_the_default_method() {
             areal_density,
             ..GridSpec::default()
         };
-        let model = ClothModel::grid(&spec).unwrap().with_hoist_pinned().unwrap();
+        let model = ClothModel::grid(&spec)
+            .unwrap()
+            .with_hoist_pinned()
+            .unwrap();
         let mut params = SimParams::default();
         params.wind.velocity = DVec3::new(8.0, 0.0, 2.0);
         let mut sim = Simulation::new(model, params).unwrap();
@@ -103,7 +110,11 @@ fn realistic_fabric_flag_runs_at_60_hz_with_the_default_method() {
         assert!(stretch.p99 < 0.15, "density {areal_density}: {stretch:?}");
         // And it flies: the fly end has been blown downwind.
         let fly_end = spec.columns - 1;
-        assert!(sim.positions()[fly_end].z > 0.05, "{:?}", sim.positions()[fly_end]);
+        assert!(
+            sim.positions()[fly_end].z > 0.05,
+            "{:?}",
+            sim.positions()[fly_end]
+        );
     }
 }
 
@@ -116,7 +127,10 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
         ..GridSpec::default()
     };
     let run = |per_substep: bool| {
-        let model = ClothModel::grid(&spec).unwrap().with_hoist_pinned().unwrap();
+        let model = ClothModel::grid(&spec)
+            .unwrap()
+            .with_hoist_pinned()
+            .unwrap();
         let mut params = SimParams::default();
         params.wind.velocity = DVec3::new(8.0, 0.0, 2.0);
         params.wind.per_substep = per_substep;
@@ -163,7 +177,10 @@ fn changing_stiffness_or_method_mid_run_does_not_jerk_the_cloth() {
     sim.step(1.0 / 60.0).unwrap();
     let after_method = record(&sim, &mut previous);
     // A jerk would move some particle much further in one frame than the waving does.
-    assert!(after_stiffness < 2.0 * before, "{after_stiffness} vs {before}");
+    assert!(
+        after_stiffness < 2.0 * before,
+        "{after_stiffness} vs {before}"
+    );
     assert!(after_method < 2.0 * before, "{after_method} vs {before}");
 }
 
@@ -214,15 +231,39 @@ fn invalid_models_are_typed_errors() {
         f(&mut s);
         ClothModel::grid(&s).err()
     };
-    assert_eq!(grid(&|s| s.columns = 1), Some(ModelError::GridTooSmall { columns: 1, rows: 46 }));
-    assert_eq!(grid(&|s| s.rows = 0), Some(ModelError::GridTooSmall { columns: 64, rows: 0 }));
-    assert!(matches!(grid(&|s| s.width = -1.0), Some(ModelError::InvalidDimension { name: "width", .. })));
-    assert!(matches!(grid(&|s| s.height = f64::NAN), Some(ModelError::InvalidDimension { name: "height", .. })));
+    assert_eq!(
+        grid(&|s| s.columns = 1),
+        Some(ModelError::GridTooSmall {
+            columns: 1,
+            rows: 46
+        })
+    );
+    assert_eq!(
+        grid(&|s| s.rows = 0),
+        Some(ModelError::GridTooSmall {
+            columns: 64,
+            rows: 0
+        })
+    );
+    assert!(matches!(
+        grid(&|s| s.width = -1.0),
+        Some(ModelError::InvalidDimension { name: "width", .. })
+    ));
+    assert!(matches!(
+        grid(&|s| s.height = f64::NAN),
+        Some(ModelError::InvalidDimension { name: "height", .. })
+    ));
     for density in [0.0, -0.2, f64::NAN, f64::INFINITY] {
-        assert!(matches!(grid(&|s| s.areal_density = density), Some(ModelError::InvalidDensity(_))));
+        assert!(matches!(
+            grid(&|s| s.areal_density = density),
+            Some(ModelError::InvalidDensity(_))
+        ));
     }
     let p = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(2.0, 0.0, 0.0)];
-    assert_eq!(ClothModel::from_triangle_mesh(&p, &[], 0.2).err(), Some(ModelError::EmptyMesh));
+    assert_eq!(
+        ClothModel::from_triangle_mesh(&p, &[], 0.2).err(),
+        Some(ModelError::EmptyMesh)
+    );
     assert_eq!(
         ClothModel::from_triangle_mesh(&p, &[0, 1], 0.2).err(),
         Some(ModelError::IndexCountNotMultipleOf3(2))
@@ -246,9 +287,18 @@ fn invalid_models_are_typed_errors() {
         Some(ModelError::MasslessParticle(3))
     );
     let mut model = ClothModel::grid(&spec).unwrap();
-    assert!(matches!(model.pin(&[1_000_000]), Err(ModelError::PinOutOfRange { index: 1_000_000, .. })));
+    assert!(matches!(
+        model.pin(&[1_000_000]),
+        Err(ModelError::PinOutOfRange {
+            index: 1_000_000,
+            ..
+        })
+    ));
     let mesh = ClothModel::from_triangle_mesh(&p, &[0, 1, 2, 1, 3, 2], 0.2).unwrap();
-    assert_eq!(mesh.clone().with_hoist_pinned().err(), Some(ModelError::NotAGrid));
+    assert_eq!(
+        mesh.clone().with_hoist_pinned().err(),
+        Some(ModelError::NotAGrid)
+    );
     assert!(Simulation::new(mesh, SimParams::default()).is_ok());
 }
 
@@ -266,9 +316,16 @@ fn invalid_parameters_and_time_steps_are_typed_errors() {
     assert_eq!(bad(&|p| p.stretch.stiffness = 0.0), "stretch");
     assert_eq!(bad(&|p| p.shear.stiffness = f64::NAN), "shear");
     assert_eq!(bad(&|p| p.bend.damping = -1.0), "bend");
-    assert_eq!(bad(&|p| p.method = Method::SmallStepsXpbd { substeps: 0 }), "method.substeps");
     assert_eq!(
-        bad(&|p| p.method = Method::Pbd { substeps: 1, iterations: 5, stiffness: 1.5 }),
+        bad(&|p| p.method = Method::SmallStepsXpbd { substeps: 0 }),
+        "method.substeps"
+    );
+    assert_eq!(
+        bad(&|p| p.method = Method::Pbd {
+            substeps: 1,
+            iterations: 5,
+            stiffness: 1.5
+        }),
         "method.stiffness"
     );
     assert_eq!(bad(&|p| p.gravity.y = f64::INFINITY), "gravity");
@@ -295,9 +352,27 @@ fn a_general_triangle_mesh_simulates() {
     }
     let indices: Vec<u32> = (0..6).flat_map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect();
     let mut model = ClothModel::from_triangle_mesh(&positions, &indices, 0.2).unwrap();
-    assert_eq!(model.springs.iter().filter(|s| s.kind == sheer_cloth::SpringKind::Stretch).count(), 12);
-    assert_eq!(model.springs.iter().filter(|s| s.kind == sheer_cloth::SpringKind::Bend).count(), 6);
-    assert!((model.total_mass() - 0.2 * 6.0 * 0.5 * 0.3 * 0.3 * (std::f64::consts::TAU / 6.0).sin()).abs() < 1e-12);
+    assert_eq!(
+        model
+            .springs
+            .iter()
+            .filter(|s| s.kind == sheer_cloth::SpringKind::Stretch)
+            .count(),
+        12
+    );
+    assert_eq!(
+        model
+            .springs
+            .iter()
+            .filter(|s| s.kind == sheer_cloth::SpringKind::Bend)
+            .count(),
+        6
+    );
+    assert!(
+        (model.total_mass() - 0.2 * 6.0 * 0.5 * 0.3 * 0.3 * (std::f64::consts::TAU / 6.0).sin())
+            .abs()
+            < 1e-12
+    );
     model.pin(&[0]).unwrap();
     let mut sim = Simulation::new(model, SimParams::default()).unwrap();
     for _ in 0..120 {

@@ -97,9 +97,11 @@ fn symplectic_methods_keep_energy_bounded_over_ten_thousand_periods() {
     // Each method conserves a quadratic form exactly (checked numerically independently):
     // symplectic Euler Q = v² + ω²x² − hω²xv, so E/E₀ stays within 1 ± ωh/(2 − ωh);
     // velocity Verlet Q = v² + ω²x²(1 − (ωh)²/4), so E/E₀ stays within [1 − (ωh)²/4, 1].
-    let symplectic_form = |x: f64, v: f64| v * v + OMEGA * OMEGA * x * x - h * OMEGA * OMEGA * x * v;
+    let symplectic_form =
+        |x: f64, v: f64| v * v + OMEGA * OMEGA * x * x - h * OMEGA * OMEGA * x * v;
     let verlet_form = |x: f64, v: f64| v * v + OMEGA * OMEGA * x * x * (1.0 - c);
-    let cases: [(Method, f64, &dyn Fn(f64, f64) -> f64); 2] = [
+    type Invariant<'a> = &'a dyn Fn(f64, f64) -> f64;
+    let cases: [(Method, f64, Invariant); 2] = [
         (
             Method::SymplecticEuler { substeps: 1 },
             OMEGA * h / (2.0 - OMEGA * h),
@@ -147,7 +149,8 @@ fn explicit_euler_gains_energy_at_every_time_step_as_predicted() {
         // As many steps as keep the growth below 10⁴ (the spring stays linear, no divergence).
         let steps = (4.0 * 10f64.ln() / (1.0 + (OMEGA * h).powi(2)).ln()).min(200.0) as i32;
         for _ in 0..steps {
-            sim.step(h).expect("growth stays below the divergence limits");
+            sim.step(h)
+                .expect("growth stays below the divergence limits");
         }
         let predicted = (1.0 + (OMEGA * h).powi(2)).powi(steps);
         let measured = energy(&sim) / e0;

@@ -1,0 +1,324 @@
+//! `sheer bench sim`: milliseconds per 60 Hz frame and particle-substeps per second for each method, on
+//! the default flag and on larger grids, measured in one run of one build.
+
+use std::fmt::Write as _;
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use sheer_cloth::glam::DVec3;
+use sheer_cloth::{ClothModel, GridSpec, Method, SimParams, Simulation};
+
+use crate::CliError;
+
+const FRAME: f64 = 1.0 / 60.0;
+
+#[derive(Debug, Args)]
+pub struct BenchSimArgs {
+    /// Methods to measure (comma-separated): explicit_euler, symplectic_euler, verlet, implicit_euler,
+    /// pbd, xpbd, small_steps_xpbd. Default: all.
+    #[arg(long, value_delimiter = ',')]
+    pub method: Vec<String>,
+    /// Grids as COLUMNSxROWS (comma-separated). Default: 16x11,64x46,256x186,1024x745.
+    #[arg(long, value_delimiter = ',')]
+    pub grid: Vec<String>,
+    /// Sub-steps per frame for every method (default: each method's stable setting on the flag).
+    #[arg(long)]
+    pub substeps: Option<u32>,
+    /// Solver iterations per sub-step (PBD, XPBD) or the CG iteration cap (implicit Euler).
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// rayon thread counts to measure (comma-separated). Default: 1 and all cores.
+    #[arg(long, value_delimiter = ',')]
+    pub threads: Vec<usize>,
+    /// Particle count from which passes run on rayon's pool (default: the library's measured threshold;
+    /// 0 forces the parallel code paths on, for finding the crossover).
+    #[arg(long)]
+    pub parallel_min_particles: Option<usize>,
+    /// Minimum measuring time per case, seconds (at least one frame is always timed).
+    #[arg(long, default_value_t = 0.5)]
+    pub seconds: f64,
+    /// Print CSV: method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s
+    #[arg(long)]
+    pub csv: bool,
+}
+
+/// The sub-steps and iterations at which each method is stable on the default flag at 60 Hz in a 6 m/s
+/// wind (found with `sheer bench sim --substeps N`; forward Euler is unstable at any practical count).
+pub fn stable_setting(name: &str) -> Option<Method> {
+    Some(match name {
+        "explicit_euler" => Method::ExplicitEuler { substeps: 400 },
+        "symplectic_euler" => Method::SymplecticEuler { substeps: 200 },
+        "verlet" => Method::Verlet { substeps: 200 },
+        "implicit_euler" => Method::ImplicitEuler {
+            substeps: 1,
+            cg_max_iterations: 100,
+            cg_tolerance: 1e-4,
+        },
+        "pbd" => Method::Pbd {
+            substeps: 4,
+            iterations: 10,
+            stiffness: 1.0,
+        },
+        "xpbd" => Method::Xpbd {
+            substeps: 2,
+            iterations: 20,
+        },
+        "small_steps_xpbd" => Method::SmallStepsXpbd { substeps: 20 },
+        _ => return None,
+    })
+}
+
+const METHOD_NAMES: [&str; 7] = [
+    "explicit_euler",
+    "symplectic_euler",
+    "verlet",
+    "implicit_euler",
+    "pbd",
+    "xpbd",
+    "small_steps_xpbd",
+];
+
+fn with_knobs(method: Method, substeps: Option<u32>, iterations: Option<u32>) -> Method {
+    let s = |x: u32| substeps.unwrap_or(x);
+    let i = |x: u32| iterations.unwrap_or(x);
+    match method {
+        Method::ExplicitEuler { substeps } => Method::ExplicitEuler {
+            substeps: s(substeps),
+        },
+        Method::SymplecticEuler { substeps } => Method::SymplecticEuler {
+            substeps: s(substeps),
+        },
+        Method::Verlet { substeps } => Method::Verlet {
+            substeps: s(substeps),
+        },
+        Method::ImplicitEuler {
+            substeps,
+            cg_max_iterations,
+            cg_tolerance,
+        } => Method::ImplicitEuler {
+            substeps: s(substeps),
+            cg_max_iterations: i(cg_max_iterations),
+            cg_tolerance,
+        },
+        Method::Pbd {
+            substeps,
+            iterations,
+            stiffness,
+        } => Method::Pbd {
+            substeps: s(substeps),
+            iterations: i(iterations),
+            stiffness,
+        },
+        Method::Xpbd {
+            substeps,
+            iterations,
+        } => Method::Xpbd {
+            substeps: s(substeps),
+            iterations: i(iterations),
+        },
+        Method::SmallStepsXpbd { substeps } => Method::SmallStepsXpbd {
+            substeps: s(substeps),
+        },
+    }
+}
+
+fn parse_grid(text: &str) -> Result<(usize, usize), CliError> {
+    let bad = || {
+        CliError::new(format!(
+            "--grid `{text}`: expected COLUMNSxROWS, e.g. 64x46"
+        ))
+    };
+    let (columns, rows) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let columns = columns.trim().parse().map_err(|_| bad())?;
+    let rows = rows.trim().parse().map_err(|_| bad())?;
+    Ok((columns, rows))
+}
+
+/// One measured case.
+pub struct Measurement {
+    pub method: Method,
+    pub columns: usize,
+    pub rows: usize,
+    /// `None` when the run diverged.
+    pub ms_per_frame: Option<f64>,
+}
+
+impl Measurement {
+    pub fn particle_substeps_per_s(&self) -> Option<f64> {
+        self.ms_per_frame.map(|ms| {
+            (self.columns * self.rows) as f64 * self.method.substeps() as f64 / (ms * 1e-3)
+        })
+    }
+}
+
+/// The default flag's geometry at another resolution, hoist pinned, in a 6 m/s wind.
+pub fn flag_simulation(
+    columns: usize,
+    rows: usize,
+    method: Method,
+    parallel_min_particles: Option<usize>,
+) -> Result<Simulation, CliError> {
+    let spec = GridSpec {
+        columns,
+        rows,
+        ..GridSpec::default()
+    };
+    let model = ClothModel::grid(&spec).and_then(|m| m.with_hoist_pinned())?;
+    let mut params = SimParams {
+        method,
+        ..SimParams::default()
+    };
+    params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
+    if let Some(threshold) = parallel_min_particles {
+        params.parallel_min_particles = threshold;
+    }
+    Ok(Simulation::new(model, params)?)
+}
+
+fn measure(
+    method: Method,
+    columns: usize,
+    rows: usize,
+    threads: usize,
+    minimum: Duration,
+    parallel_min_particles: Option<usize>,
+) -> Result<Measurement, CliError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| CliError::new(format!("cannot start {threads} threads: {e}")))?;
+    pool.install(|| {
+        let mut sim = flag_simulation(columns, rows, method, parallel_min_particles)?;
+        let mut result = Measurement {
+            method,
+            columns,
+            rows,
+            ms_per_frame: None,
+        };
+        // Warm up (caches, the flag starts to wave), then time whole frames.
+        for _ in 0..3 {
+            if sim.step(FRAME).is_err() {
+                return Ok(result);
+            }
+        }
+        let start = Instant::now();
+        let mut frames = 0u32;
+        while frames == 0 || start.elapsed() < minimum {
+            if sim.step(FRAME).is_err() {
+                return Ok(result);
+            }
+            frames += 1;
+        }
+        result.ms_per_frame = Some(start.elapsed().as_secs_f64() * 1e3 / frames as f64);
+        Ok(result)
+    })
+}
+
+pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
+    if !(args.seconds.is_finite() && args.seconds >= 0.0) {
+        return Err(CliError::new(format!(
+            "--seconds must be ≥ 0, got {}",
+            args.seconds
+        )));
+    }
+    let names: Vec<String> = if args.method.is_empty() {
+        METHOD_NAMES.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.method.clone()
+    };
+    let mut methods = Vec::new();
+    for name in &names {
+        let method = stable_setting(name).ok_or_else(|| {
+            CliError::new(format!(
+                "unknown method `{name}` (expected one of {})",
+                METHOD_NAMES.join(", ")
+            ))
+        })?;
+        if args.substeps == Some(0) || args.iterations == Some(0) {
+            return Err(CliError::new("--substeps and --iterations must be ≥ 1"));
+        }
+        methods.push(with_knobs(method, args.substeps, args.iterations));
+    }
+    let grids: Vec<(usize, usize)> = if args.grid.is_empty() {
+        vec![(16, 11), (64, 46), (256, 186), (1024, 745)]
+    } else {
+        args.grid
+            .iter()
+            .map(|g| parse_grid(g))
+            .collect::<Result<_, _>>()?
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut threads = if args.threads.is_empty() {
+        vec![1, cores]
+    } else {
+        args.threads.clone()
+    };
+    threads.dedup();
+    if threads.contains(&0) {
+        return Err(CliError::new("--threads must be ≥ 1"));
+    }
+    let minimum = Duration::from_secs_f64(args.seconds);
+    if args.csv {
+        println!(
+            "method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s"
+        );
+    } else {
+        println!(
+            "{:<18} {:>11} {:>8} {:>10} {:>7} {:>12} {:>22}",
+            "method",
+            "grid",
+            "substeps",
+            "iterations",
+            "threads",
+            "ms/frame",
+            "particle-substeps/s"
+        );
+    }
+    for &(columns, rows) in &grids {
+        for &method in &methods {
+            for &t in &threads {
+                let m = measure(
+                    method,
+                    columns,
+                    rows,
+                    t,
+                    minimum,
+                    args.parallel_min_particles,
+                )?;
+                let mut line = String::new();
+                if args.csv {
+                    let _ = write!(
+                        line,
+                        "{},{},{},{},{},{},{},{}",
+                        method.name(),
+                        columns,
+                        rows,
+                        method.substeps(),
+                        method.iterations(),
+                        t,
+                        m.ms_per_frame
+                            .map_or("diverged".into(), |v| format!("{v:.4}")),
+                        m.particle_substeps_per_s()
+                            .map_or("diverged".into(), |v| format!("{v:.4e}"))
+                    );
+                } else {
+                    let _ = write!(
+                        line,
+                        "{:<18} {:>11} {:>8} {:>10} {:>7} {:>12} {:>22}",
+                        method.name(),
+                        format!("{columns}x{rows}"),
+                        method.substeps(),
+                        method.iterations(),
+                        t,
+                        m.ms_per_frame
+                            .map_or("diverged".into(), |v| format!("{v:.3}")),
+                        m.particle_substeps_per_s()
+                            .map_or("diverged".into(), |v| format!("{v:.3e}"))
+                    );
+                }
+                println!("{line}");
+            }
+        }
+    }
+    Ok(())
+}
