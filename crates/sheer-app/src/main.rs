@@ -3,6 +3,8 @@
 //! Every failure prints one line, `error: …`, and exits with status 1 (usage errors: clap's status 2).
 
 mod bench_sim;
+mod scene;
+mod simulate;
 
 use std::process::ExitCode;
 
@@ -15,6 +17,19 @@ pub struct CliError(String);
 impl CliError {
     pub fn new(message: impl Into<String>) -> Self {
         CliError(message.into())
+    }
+
+    /// Appends the line number of `span` in `text`, when there is one.
+    pub fn with_span(self, text: &str, span: Option<std::ops::Range<usize>>) -> Self {
+        match span {
+            Some(span) => {
+                let start = span.start.min(text.len());
+                let line = text[..start].matches('\n').count() + 1;
+                let source = text.lines().nth(line - 1).unwrap_or("").trim();
+                CliError(format!("{} (line {line}: `{source}`)", self.0))
+            }
+            None => self,
+        }
     }
 }
 
@@ -37,6 +52,34 @@ impl From<sheer_cloth::SetupError> for CliError {
     }
 }
 
+/// The scene at `path`, or the default scene when `None`.
+pub fn load_scene(path: Option<&std::path::Path>) -> Result<scene::Scene, CliError> {
+    match path {
+        Some(path) => scene::Scene::load(path),
+        None => {
+            let default = scene::Scene::default();
+            let path = default.base_dir.join("default.scene.toml");
+            if path.exists() {
+                scene::Scene::load(&path)
+            } else {
+                Ok(default)
+            }
+        }
+    }
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress_bar(length: u64, message: &'static str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(length);
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({eta})")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(message);
+    bar
+}
+
 #[derive(Debug, Parser)]
 #[command(
     name = "sheer",
@@ -50,6 +93,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Simulate a scene's flag and write every frame's mesh as OBJ.
+    Simulate(simulate::SimulateArgs),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -64,6 +109,7 @@ enum BenchCommand {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
+        Command::Simulate(args) => simulate::run(args),
         Command::Bench(BenchCommand::Sim(args)) => bench_sim::run(args),
     };
     match result {
