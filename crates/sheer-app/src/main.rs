@@ -2,9 +2,14 @@
 //!
 //! Every failure prints one line, `error: …`, and exits with status 1 (usage errors: clap's status 2).
 
+mod bench_render;
 mod bench_sim;
+mod frame;
+mod render_cmd;
 mod scene;
 mod simulate;
+mod slab_cmd;
+mod window;
 
 use std::process::ExitCode;
 
@@ -88,13 +93,28 @@ pub fn progress_bar(length: u64, message: &'static str) -> indicatif::ProgressBa
 )]
 struct Cli {
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
+    /// Window: scene file (TOML); default: the shipped default scene.
+    #[arg(long)]
+    scene: Option<std::path::PathBuf>,
+    /// Window: run this many frames, then exit (after the screenshot, with --screenshot).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Window: save a screenshot of the whole window as PNG after --frames frames.
+    #[arg(long, requires = "frames")]
+    screenshot: Option<std::path::PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Render a scene headless: one frame, or a sequence (PNG and linear OpenEXR).
+    Render(render_cmd::RenderArgs),
+    /// The paper's figure 2: baseline and thin-slab, back-lit and front-lit, as one 2×2 image.
+    Figure2(render_cmd::Figure2Args),
     /// Simulate a scene's flag and write every frame's mesh as OBJ.
     Simulate(simulate::SimulateArgs),
+    /// Evaluate the thin-slab model for CSV rows `tau1,albedo,mu0,mu`.
+    Slab(slab_cmd::SlabArgs),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -104,13 +124,29 @@ enum Command {
 enum BenchCommand {
     /// Simulation cost per 60 Hz frame for each method and grid.
     Sim(bench_sim::BenchSimArgs),
+    /// Frames per second of the case study per evaluation path and baseline, with per-stage times.
+    Render(bench_render::BenchRenderArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Simulate(args) => simulate::run(args),
-        Command::Bench(BenchCommand::Sim(args)) => bench_sim::run(args),
+        None => window::run(window::WindowOptions {
+            scene: cli.scene.clone(),
+            frames: cli.frames,
+            screenshot: cli.screenshot.clone(),
+        }),
+        Some(_) if cli.frames.is_some() || cli.screenshot.is_some() || cli.scene.is_some() => {
+            Err(CliError::new(
+                "--scene/--frames/--screenshot before a subcommand are window options; put --scene after the subcommand",
+            ))
+        }
+        Some(Command::Render(args)) => render_cmd::run_render(args),
+        Some(Command::Figure2(args)) => render_cmd::run_figure2(args),
+        Some(Command::Slab(args)) => slab_cmd::run(args),
+        Some(Command::Simulate(args)) => simulate::run(args),
+        Some(Command::Bench(BenchCommand::Sim(args))) => bench_sim::run(args),
+        Some(Command::Bench(BenchCommand::Render(args))) => bench_render::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -50,7 +50,7 @@ pub struct ShadingSection {
     pub optical_thickness: [f32; 3],
     /// Multiplies the albedo texture to give Λ per channel (Λ must stay in [0, 1]).
     pub albedo_scale: [f32; 3],
-    /// Albedo texture, relative to the scene file (sRGB PNG; decoded to linear).
+    /// Albedo texture, relative to the scene file (sRGB PNG; decoded to linear); `""` for white.
     pub albedo_texture: Option<String>,
     /// Optional thickness texture (red channel multiplies τ1), relative to the scene file.
     pub thickness_texture: Option<String>,
@@ -149,7 +149,8 @@ impl Default for CameraSection {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BackgroundSection {
-    /// Painting behind the flag, relative to the scene file (sRGB PNG), stretched over the frame.
+    /// Painting behind the flag, relative to the scene file (sRGB PNG), stretched over the frame;
+    /// `""` for none (the uniform colour). A static sheet always uses the uniform colour.
     pub image: Option<String>,
     /// Uniform linear radiance, W/(m²·sr), used when there is no image.
     pub colour: [f32; 3],

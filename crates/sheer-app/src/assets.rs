@@ -1,0 +1,888 @@
+//! Procedural image assets of the case study: the flag of the Faroe Islands (the cloth's albedo texture Λ) and a
+//! watercolour-like painting of a Faroese coast (the background the flag waves in front of).
+//!
+//! Frisvad, Christensen & Falster (2005) render the Faroese flag in front of a scanned watercolour of a Faroese
+//! landscape. We have no scan, so [`faroe_landscape`] paints one: every wash is a layer of pigment glazed over
+//! white paper in the subtractive (Beer–Lambert) way of Curtis et al., "Computer-generated watercolor"
+//! (SIGGRAPH 1997): reflectance = paper · exp(−Σ density·absorbance). The watercolour effects of that paper that
+//! matter at a glance are imitated directly instead of by fluid simulation: the darkened rim where a wash dries
+//! (edge darkening), granulation of pigment in the paper's valleys, back-runs ("blooms"), irregular wash edges,
+//! paper left white between washes and at the margins, and a fine paper grain.
+//!
+//! Everything here is a pure function of its arguments; [`write_assets`] is the only function that touches the
+//! file system. Rows are computed in parallel, each pixel from its own coordinates only, so the images are
+//! identical whatever the rayon thread count.
+
+use std::path::{Path, PathBuf};
+
+use image::RgbImage;
+use rayon::prelude::*;
+
+/// Width × height of the committed flag texture: 50 px per construction unit both ways (22 × 16 units).
+pub const FLAG_ASSET_SIZE: (u32, u32) = (1100, 800);
+/// Width × height of the committed background painting.
+pub const LANDSCAPE_ASSET_SIZE: (u32, u32) = (1024, 1024);
+/// Seed of the committed background painting.
+pub const LANDSCAPE_ASSET_SEED: u64 = 1;
+/// File names written by [`write_assets`].
+pub const FLAG_FILE_NAME: &str = "faroe_flag.png";
+pub const LANDSCAPE_FILE_NAME: &str = "faroe_landscape.png";
+
+/// Largest image this module allocates (bytes of RGB8 data): 2^30, a 16k × 16k-ish image, far beyond any texture
+/// the renderer uploads; it keeps a typo in a size from exhausting memory.
+const MAX_IMAGE_BYTES: u64 = 1 << 30;
+
+/// Why an asset could not be made or written.
+#[derive(Debug, thiserror::Error)]
+pub enum AssetError {
+    /// The flag's fly is divided into 22 construction units; fewer pixels cannot show the 1-unit blue border.
+    #[error(
+        "flag width {width} px is too small: at least 22 px are needed for the 22 construction units of its length"
+    )]
+    FlagTooNarrow { width: u32 },
+    /// A painting needs at least one pixel each way.
+    #[error("landscape size {width}×{height} px has a zero side")]
+    EmptyImage { width: u32, height: u32 },
+    /// The requested image would exceed [`MAX_IMAGE_BYTES`].
+    #[error("image of {width}×{height} px needs more than {max_bytes} bytes of RGB data")]
+    ImageTooLarge {
+        width: u32,
+        height: u32,
+        max_bytes: u64,
+    },
+    /// The output folder could not be created.
+    #[error("cannot create folder {path}: {source}")]
+    CreateDir {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The image crate could not encode or write a PNG.
+    #[error("cannot write image {path}: {source}")]
+    Write {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// The flag
+// ---------------------------------------------------------------------------------------------------------------
+
+/// Construction units along the flag's length (hoist to fly): white, blue, red, blue, white.
+pub const FLAG_UNITS_LENGTH: [u32; 5] = [6, 1, 2, 1, 12];
+/// Construction units along the flag's height (top to bottom): white, blue, red, blue, white.
+pub const FLAG_UNITS_HEIGHT: [u32; 5] = [6, 1, 2, 1, 6];
+/// White field, sRGB.
+pub const FLAG_WHITE: [u8; 3] = [0xFF, 0xFF, 0xFF];
+/// Red of the cross, sRGB `#EF303E`: the usual sRGB rendering of Pantone 032 C.
+pub const FLAG_RED: [u8; 3] = [0xEF, 0x30, 0x3E];
+/// Blue border of the cross, sRGB `#005EB8`: Pantone's sRGB value for Pantone 300 C.
+pub const FLAG_BLUE: [u8; 3] = [0x00, 0x5E, 0xB8];
+
+/// The flag of the Faroe Islands (Merkið), `width` px long and `round(width·8/11)` px high.
+///
+/// Source: the Faroese flag act (løgtingslóg um flagg Føroya, 1959; colours set in the Pantone system by the
+/// Løgting on 29 December 1998): a white field with a red Nordic cross bordered in blue; red Pantone 032, blue
+/// Pantone 300; proportions 8:11, constructed 6:1:2:1:12 along the length (units of 1/22 of the width) and
+/// 6:1:2:1:6 along the height (units of 1/16 of the height). The construction and Pantone shades are as published
+/// by the Nordic Council (norden.org, "Færøsk flag") and Flags of the World (fo.html).
+///
+/// Each pixel gets the exact area fraction of white, blue and red inside its square (the bands are axis-aligned,
+/// so the coverage of a pixel factors into a length fraction and a height fraction), blended in linear light and
+/// re-encoded as sRGB. Where band edges fall on pixel boundaries (width a multiple of 22 and height a multiple of
+/// 16, e.g. 1100 × 800 with 50 px per unit) every pixel is a pure flag colour, identical to classifying it by its
+/// centre; elsewhere edge pixels are anti-aliased by their true area coverage.
+pub fn faroe_flag(width: u32) -> Result<RgbImage, AssetError> {
+    let total_length: u32 = FLAG_UNITS_LENGTH.iter().sum();
+    if width < total_length {
+        return Err(AssetError::FlagTooNarrow { width });
+    }
+    let height = flag_height(width);
+    check_size(width, height)?;
+    let total_height: u32 = FLAG_UNITS_HEIGHT.iter().sum();
+    // Cross (blue border and red) and red bands, in construction units.
+    let cross_x = band_interval(&FLAG_UNITS_LENGTH, 1, 3);
+    let red_x = band_interval(&FLAG_UNITS_LENGTH, 2, 2);
+    let cross_y = band_interval(&FLAG_UNITS_HEIGHT, 1, 3);
+    let red_y = band_interval(&FLAG_UNITS_HEIGHT, 2, 2);
+    let unit_per_px_x = f64::from(total_length) / f64::from(width);
+    let unit_per_px_y = f64::from(total_height) / f64::from(height);
+    // Per-column and per-row length fractions covered by the cross and by the red bands.
+    let column_cover: Vec<(f64, f64)> = (0..width)
+        .map(|x| {
+            let span = (
+                f64::from(x) * unit_per_px_x,
+                f64::from(x + 1) * unit_per_px_x,
+            );
+            (
+                interval_fraction(span, cross_x),
+                interval_fraction(span, red_x),
+            )
+        })
+        .collect();
+    let white = srgb8_to_linear(FLAG_WHITE);
+    let red = srgb8_to_linear(FLAG_RED);
+    let blue = srgb8_to_linear(FLAG_BLUE);
+    let mut image = RgbImage::new(width, height);
+    image
+        .as_mut()
+        .par_chunks_mut(width as usize * 3)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let y = y as f64;
+            let span = (y * unit_per_px_y, (y + 1.0) * unit_per_px_y);
+            let (cross_fy, red_fy) = (
+                interval_fraction(span, cross_y),
+                interval_fraction(span, red_y),
+            );
+            for (pixel, &(cross_fx, red_fx)) in row.chunks_exact_mut(3).zip(&column_cover) {
+                // A point is in the red cross if it lies in the red column OR the red row; the area of the
+                // complement is the product of the two complements' fractions. Likewise for the whole cross.
+                let red_area = 1.0 - (1.0 - red_fx) * (1.0 - red_fy);
+                let cross_area = 1.0 - (1.0 - cross_fx) * (1.0 - cross_fy);
+                let blue_area = cross_area - red_area;
+                let white_area = 1.0 - cross_area;
+                let encoded = if red_area == 1.0 {
+                    FLAG_RED
+                } else if blue_area == 1.0 {
+                    FLAG_BLUE
+                } else if white_area == 1.0 {
+                    FLAG_WHITE
+                } else {
+                    let mixed: [f64; 3] = std::array::from_fn(|c| {
+                        white_area * white[c] + blue_area * blue[c] + red_area * red[c]
+                    });
+                    linear_to_srgb8(mixed)
+                };
+                pixel.copy_from_slice(&encoded);
+            }
+        });
+    Ok(image)
+}
+
+/// Flag height for a given width, `round(width·8/11)` (8·width/11 is never a half-integer since 11 is odd).
+pub fn flag_height(width: u32) -> u32 {
+    ((u64::from(width) * 8 + 5) / 11) as u32
+}
+
+/// `[start, end)` in construction units of bands `first..=last` of a band list.
+fn band_interval(units: &[u32; 5], first: usize, last: usize) -> (f64, f64) {
+    let start: u32 = units[..first].iter().sum();
+    let end: u32 = units[..=last].iter().sum();
+    (f64::from(start), f64::from(end))
+}
+
+/// Fraction of `span` covered by `band` (both half-open intervals, `span` non-empty).
+fn interval_fraction(span: (f64, f64), band: (f64, f64)) -> f64 {
+    let overlap = span.1.min(band.1) - span.0.max(band.0);
+    (overlap / (span.1 - span.0)).clamp(0.0, 1.0)
+}
+
+fn check_size(width: u32, height: u32) -> Result<(), AssetError> {
+    if width == 0 || height == 0 {
+        return Err(AssetError::EmptyImage { width, height });
+    }
+    if u64::from(width) * u64::from(height) * 3 > MAX_IMAGE_BYTES {
+        return Err(AssetError::ImageTooLarge {
+            width,
+            height,
+            max_bytes: MAX_IMAGE_BYTES,
+        });
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Colour
+// ---------------------------------------------------------------------------------------------------------------
+
+/// sRGB transfer function (IEC 61966-2-1), encoded [0, 1] → linear [0, 1].
+fn srgb_to_linear(encoded: f64) -> f64 {
+    if encoded <= 0.04045 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Inverse sRGB transfer function, linear [0, 1] → encoded [0, 1].
+fn linear_to_srgb(linear: f64) -> f64 {
+    if linear <= 0.003_130_8 {
+        linear * 12.92
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn srgb8_to_linear(rgb: [u8; 3]) -> [f64; 3] {
+    rgb.map(|c| srgb_to_linear(f64::from(c) / 255.0))
+}
+
+fn linear_to_srgb8(rgb: [f64; 3]) -> [u8; 3] {
+    // The clamp only absorbs rounding below 0 or above 1 of values that are reflectances by construction.
+    rgb.map(|c| (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0).round() as u8)
+}
+
+/// Absorbance −ln T per channel of a pigment that, glazed at density 1 over white paper, shows sRGB colour `rgb`.
+fn pigment(rgb: [u8; 3]) -> [f64; 3] {
+    // Floor at 1e-4 so that a zero channel is a strong but finite absorber (no infinities, no NaN at density 0).
+    srgb8_to_linear(rgb).map(|t| -t.max(1e-4).ln())
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Deterministic value noise
+// ---------------------------------------------------------------------------------------------------------------
+
+/// SplitMix64's output mix (Steele, Lea & Flood 2014): a cheap bijective scrambler of 64-bit integers.
+fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Uniform number in [0, 1) from 53 bits of a hash.
+fn unit_from_bits(bits: u64) -> f64 {
+    (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// Smoothly interpolated lattice ("value") noise in [0, 1] and its fractal sum.
+#[derive(Clone, Copy, Debug)]
+struct ValueNoise {
+    seed: u64,
+}
+
+impl ValueNoise {
+    fn new(seed: u64, stream: u64) -> Self {
+        ValueNoise {
+            seed: mix64(seed ^ mix64(stream.wrapping_add(0x9E37_79B9_7F4A_7C15))),
+        }
+    }
+
+    fn lattice(&self, ix: i64, iy: i64, octave: u64) -> f64 {
+        let key = (ix as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (iy as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+            ^ octave.wrapping_mul(0x1656_67B1_9E37_79F9);
+        unit_from_bits(mix64(self.seed ^ mix64(key)))
+    }
+
+    /// One octave: bilinear interpolation of lattice values with the quintic fade 6t⁵ − 15t⁴ + 10t³ (Perlin 2002),
+    /// so the noise has a continuous first and second derivative.
+    fn sample(&self, x: f64, y: f64, octave: u64) -> f64 {
+        let (fx, fy) = (x.floor(), y.floor());
+        let (ix, iy) = (fx as i64, fy as i64);
+        let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+        let (tx, ty) = (fade(x - fx), fade(y - fy));
+        let top = lerp(
+            self.lattice(ix, iy, octave),
+            self.lattice(ix + 1, iy, octave),
+            tx,
+        );
+        let bottom = lerp(
+            self.lattice(ix, iy + 1, octave),
+            self.lattice(ix + 1, iy + 1, octave),
+            tx,
+        );
+        lerp(top, bottom, ty)
+    }
+
+    /// Fractal Brownian motion: `octaves` octaves of doubling frequency and halving amplitude, normalised to
+    /// [0, 1] (mean 0.5; the sum of independent octaves concentrates around it, standard deviation ≈ 0.15–0.2).
+    fn fbm(&self, x: f64, y: f64, octaves: u32) -> f64 {
+        let (mut sum, mut norm, mut amplitude, mut frequency) = (0.0, 0.0, 1.0, 1.0);
+        for octave in 0..octaves {
+            sum += amplitude * self.sample(x * frequency, y * frequency, u64::from(octave));
+            norm += amplitude;
+            amplitude *= 0.5;
+            frequency *= 2.0;
+        }
+        sum / norm
+    }
+}
+
+fn lerp(a: f64, b: f64, t: f64) -> f64 {
+    a + (b - a) * t
+}
+
+fn smoothstep(edge0: f64, edge1: f64, x: f64) -> f64 {
+    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// The painting
+// ---------------------------------------------------------------------------------------------------------------
+
+/// Pigments, as the sRGB colour each shows glazed at density 1 over white paper.
+mod palette {
+    pub const PAPER: [u8; 3] = [0xF8, 0xF4, 0xEA];
+    pub const SKY_ULTRAMARINE: [u8; 3] = [0x5A, 0x82, 0xC4];
+    pub const SKY_CERULEAN: [u8; 3] = [0x8C, 0xBC, 0xDE];
+    pub const PAYNES_GREY: [u8; 3] = [0x6A, 0x74, 0x84];
+    pub const YELLOW_OCHRE: [u8; 3] = [0xE0, 0xC0, 0x78];
+    pub const SAP_GREEN: [u8; 3] = [0x6A, 0x9A, 0x38];
+    pub const YELLOW_GREEN: [u8; 3] = [0x9C, 0xBA, 0x4A];
+    pub const HOOKERS_GREEN: [u8; 3] = [0x3A, 0x66, 0x44];
+    pub const SEPIA: [u8; 3] = [0x6E, 0x5C, 0x4C];
+    pub const SEA_PRUSSIAN: [u8; 3] = [0x2A, 0x64, 0x86];
+    pub const SEA_GREEN: [u8; 3] = [0x4A, 0x8A, 0x90];
+}
+
+/// Sea level (the horizon) as a fraction of the image height from the top.
+const HORIZON: f64 = 0.52;
+
+/// A back-run: a patch where late water pushed pigment outwards, paler inside and dark at its rim.
+#[derive(Clone, Copy, Debug)]
+struct Bloom {
+    centre: (f64, f64),
+    radius: f64,
+}
+
+/// Signed distance (positive inside, in image heights) of the land masses, for one pixel.
+#[derive(Clone, Copy, Debug)]
+struct LandDistances {
+    near: f64,
+    middle: f64,
+    stacks: f64,
+    far: f64,
+}
+
+impl LandDistances {
+    fn max(&self) -> f64 {
+        self.near.max(self.middle).max(self.stacks).max(self.far)
+    }
+}
+
+/// Pigments converted to absorbance once.
+struct Pigments {
+    sky_ultramarine: [f64; 3],
+    sky_cerulean: [f64; 3],
+    paynes_grey: [f64; 3],
+    yellow_ochre: [f64; 3],
+    sap_green: [f64; 3],
+    yellow_green: [f64; 3],
+    hookers_green: [f64; 3],
+    sepia: [f64; 3],
+    sea_prussian: [f64; 3],
+    sea_green: [f64; 3],
+}
+
+/// The painting as a function of image position.
+struct Painting {
+    aspect: f64,
+    pixel: f64,
+    paper: [f64; 3],
+    pigments: Pigments,
+    blooms: Vec<Bloom>,
+    // Independent noise streams, one per purpose, so changing one effect does not reshuffle the others.
+    grain: ValueNoise,
+    edge: ValueNoise,
+    brush: ValueNoise,
+    hue: ValueNoise,
+    cloud: ValueNoise,
+    cloud_shade: ValueNoise,
+    sea_streak: ValueNoise,
+    sea_crest: ValueNoise,
+    profile: ValueNoise,
+    strata: ValueNoise,
+    bloom_shape: ValueNoise,
+}
+
+/// Accumulated absorbance of the washes over one pixel.
+#[derive(Clone, Copy, Debug, Default)]
+struct Washes {
+    absorbance: [f64; 3],
+}
+
+impl Washes {
+    fn glaze(&mut self, pigment: &[f64; 3], density: f64) {
+        for (a, p) in self.absorbance.iter_mut().zip(pigment) {
+            *a += density * p;
+        }
+    }
+
+    /// Two pigments mixed on the palette in proportion `weight` of `second`, laid at `density`.
+    fn glaze_mix(&mut self, first: &[f64; 3], second: &[f64; 3], weight: f64, density: f64) {
+        let mixed: [f64; 3] = std::array::from_fn(|c| lerp(first[c], second[c], weight));
+        self.glaze(&mixed, density);
+    }
+}
+
+impl Painting {
+    fn new(width: u32, height: u32, seed: u64) -> Self {
+        let stream = |n: u64| ValueNoise::new(seed, n);
+        let blooms = Self::scatter_blooms(seed);
+        Painting {
+            aspect: f64::from(width) / f64::from(height),
+            pixel: 1.0 / f64::from(height),
+            paper: srgb8_to_linear(palette::PAPER),
+            pigments: Pigments {
+                sky_ultramarine: pigment(palette::SKY_ULTRAMARINE),
+                sky_cerulean: pigment(palette::SKY_CERULEAN),
+                paynes_grey: pigment(palette::PAYNES_GREY),
+                yellow_ochre: pigment(palette::YELLOW_OCHRE),
+                sap_green: pigment(palette::SAP_GREEN),
+                yellow_green: pigment(palette::YELLOW_GREEN),
+                hookers_green: pigment(palette::HOOKERS_GREEN),
+                sepia: pigment(palette::SEPIA),
+                sea_prussian: pigment(palette::SEA_PRUSSIAN),
+                sea_green: pigment(palette::SEA_GREEN),
+            },
+            blooms,
+            grain: stream(1),
+            edge: stream(2),
+            brush: stream(3),
+            hue: stream(4),
+            cloud: stream(5),
+            cloud_shade: stream(6),
+            sea_streak: stream(7),
+            sea_crest: stream(8),
+            profile: stream(9),
+            strata: stream(10),
+            bloom_shape: stream(11),
+        }
+    }
+
+    /// A handful of blooms at seeded places in the sky and on the land (in image-width × image-height units).
+    fn scatter_blooms(seed: u64) -> Vec<Bloom> {
+        let mut state = mix64(seed ^ 0xB100_B100_B100_B100);
+        let mut next = || {
+            state = mix64(state.wrapping_add(0x9E37_79B9_7F4A_7C15));
+            unit_from_bits(state)
+        };
+        (0..9)
+            .map(|_| {
+                let u = 0.06 + 0.88 * next();
+                let v = 0.06 + 0.58 * next();
+                Bloom {
+                    centre: (u, v),
+                    radius: 0.025 + 0.045 * next(),
+                }
+            })
+            .collect()
+    }
+
+    /// Horizontal distance `du` (image widths) in image heights, the unit all distances use.
+    fn horizontal(&self, du: f64) -> f64 {
+        du * self.aspect
+    }
+
+    /// Noise jitter of wash edges, ± `amplitude` image heights, so no silhouette is a clean vector curve.
+    fn edge_jitter(&self, u: f64, v: f64, amplitude: f64) -> f64 {
+        let x = self.horizontal(u);
+        amplitude * 2.0 * (self.edge.fbm(x * 60.0, v * 60.0, 3) - 0.5)
+    }
+
+    /// Coverage and edge-darkening factor of a wash whose signed distance (image heights, positive inside) is
+    /// `distance`. The rim, where pigment is carried outwards as the wash dries, holds up to `1 + rim` times the
+    /// pigment, decaying inwards over `rim_width`.
+    fn wash_profile(&self, distance: f64, rim: f64, rim_width: f64) -> f64 {
+        let coverage = smoothstep(-0.7 * self.pixel, 0.7 * self.pixel, distance);
+        coverage * (1.0 + rim * (-distance.max(0.0) / rim_width).exp())
+    }
+
+    /// Top of the near headland (left), image heights from the top, at horizontal position `u`.
+    fn near_top(&self, u: f64) -> f64 {
+        // A grassy shoulder falling towards the cliff edge, with low undulations.
+        0.20 + 0.10 * (u / 0.42).clamp(0.0, 1.2).powi(2)
+            + 0.03 * (self.profile.fbm(u * 7.0, 0.5, 4) - 0.5)
+    }
+
+    /// Horizontal position of the near headland's sea cliff at height `v`.
+    fn near_face(&self, v: f64) -> f64 {
+        // Leaning slightly outwards towards the sea, with ledges from the basalt layers.
+        0.41 + 0.07 * ((v - 0.28) / 0.40).clamp(0.0, 1.0).powf(1.5)
+            + 0.025 * (self.profile.fbm(3.7, v * 22.0, 4) - 0.5)
+    }
+
+    /// Waterline under the near headland: the shore comes towards the viewer on the left.
+    fn near_base(&self, u: f64) -> f64 {
+        0.64 + 0.08 * (1.0 - u / 0.48).clamp(0.0, 1.0)
+            + 0.006 * (self.profile.fbm(u * 30.0, 7.1, 3) - 0.5)
+    }
+
+    fn near_distance(&self, u: f64, v: f64) -> f64 {
+        let top = v - self.near_top(u);
+        let face = self.horizontal(self.near_face(v) - u);
+        let base = self.near_base(u) - v;
+        top.min(face).min(base)
+    }
+
+    /// Top of the middle headland (right), with its summit near u = 0.8.
+    fn middle_top(&self, u: f64) -> f64 {
+        0.35 - 0.06 * (-((u - 0.80) / 0.13).powi(2)).exp()
+            + 0.02 * (self.profile.fbm(u * 9.0, 2.3, 4) - 0.5)
+    }
+
+    /// Left sea cliff of the middle headland.
+    fn middle_face(&self, v: f64) -> f64 {
+        0.615 - 0.03 * ((v - 0.34) / 0.23).clamp(0.0, 1.0)
+            + 0.018 * (self.profile.fbm(5.9, v * 25.0, 4) - 0.5)
+    }
+
+    const MIDDLE_BASE: f64 = 0.575;
+
+    fn middle_distance(&self, u: f64, v: f64) -> f64 {
+        let top = v - self.middle_top(u);
+        let face = self.horizontal(u - self.middle_face(v));
+        let base = Self::MIDDLE_BASE - v;
+        top.min(face).min(base)
+    }
+
+    /// Sea stacks (after Risin and Kellingin off Eysturoy): centre u, half width (image heights), top v.
+    const STACKS: [(f64, f64, f64); 2] = [(0.525, 0.016, 0.395), (0.565, 0.010, 0.43)];
+    const STACK_BASE: f64 = 0.585;
+
+    fn stack_distance(&self, u: f64, v: f64) -> f64 {
+        Self::STACKS
+            .iter()
+            .map(|&(centre, half_width, top)| {
+                // Wider at the foot, rough sides.
+                let depth = ((v - top) / (Self::STACK_BASE - top)).clamp(0.0, 1.0);
+                let half = half_width
+                    * (0.7 + 0.5 * depth)
+                    * (0.85 + 0.3 * self.profile.fbm(centre * 50.0, v * 40.0, 3));
+                let across = self.horizontal((u - centre).abs());
+                // Rounded crown: the top drops off towards the sides.
+                let crown = v - top - 0.6 * half * (across / half).powi(2);
+                (half - across).min(crown).min(Self::STACK_BASE - v)
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// A pale flat-topped island on the horizon.
+    fn far_distance(&self, u: f64, v: f64) -> f64 {
+        let shape = (1.0 - ((u - 0.53) / 0.15).powi(2)).max(0.0).powf(0.5);
+        let top = HORIZON - 0.05 * shape + 0.006 * (self.profile.fbm(u * 20.0, 4.4, 3) - 0.5);
+        (v - top).min(HORIZON + 0.004 - v)
+    }
+
+    fn land(&self, u: f64, v: f64) -> LandDistances {
+        let jitter = self.edge_jitter(u, v, 0.0025);
+        LandDistances {
+            near: self.near_distance(u, v) + jitter,
+            middle: self.middle_distance(u, v) + jitter,
+            stacks: self.stack_distance(u, v) + 0.5 * jitter,
+            far: self.far_distance(u, v) + 0.5 * jitter,
+        }
+    }
+
+    /// Painted area inside the deckled paper margin: signed distance (image heights) to the painting's edge.
+    fn margin_distance(&self, u: f64, v: f64) -> f64 {
+        let to_border = self.horizontal(u.min(1.0 - u)).min(v.min(1.0 - v));
+        let margin = 0.022 + 0.012 * self.edge.fbm(self.horizontal(u) * 9.0 + 40.0, v * 9.0, 3);
+        to_border - margin
+    }
+
+    /// Multiplier of all washes inside and around the blooms: paler inside, darker at the cauliflower rim.
+    fn bloom_factor(&self, u: f64, v: f64) -> f64 {
+        let mut factor = 1.0;
+        for (index, bloom) in self.blooms.iter().enumerate() {
+            let dx = self.horizontal(u - bloom.centre.0);
+            let dy = v - bloom.centre.1;
+            let r = (dx * dx + dy * dy).sqrt();
+            if r > 1.6 * bloom.radius {
+                continue;
+            }
+            // Radius modulated around the circle (noise on the unit circle: seamless) into a cauliflower outline.
+            let (dir_x, dir_y) = if r > 0.0 {
+                (dx / r, dy / r)
+            } else {
+                (1.0, 0.0)
+            };
+            let offset = 17.0 * index as f64;
+            let lobes = self.bloom_shape.fbm(dir_x * 2.5 + offset, dir_y * 2.5, 4);
+            let outline = bloom.radius * (0.65 + 0.7 * lobes);
+            let inside = outline - r;
+            let rim_width = 0.004;
+            factor *= if inside > 0.0 {
+                0.82 + 0.38 * (-inside / rim_width).exp()
+            } else {
+                1.0 + 0.12 * (inside / (0.5 * rim_width)).exp()
+            };
+        }
+        factor
+    }
+
+    /// Linear reflectance of the painting at (u, v) ∈ [0, 1]² (image width, image height from the top).
+    fn reflectance(&self, u: f64, v: f64) -> [f64; 3] {
+        let p = &self.pigments;
+        let x = self.horizontal(u);
+        let land = self.land(u, v);
+        let land_max = land.max();
+        let margin = self.margin_distance(u, v) + self.edge_jitter(u + 3.0, v, 0.002);
+
+        // Paper texture: a fine grain (a few px) and the granulation it causes in the heavier pigments.
+        let grain = self.grain.fbm(x * 320.0, v * 320.0, 2);
+        let granulation = 1.0 + 0.9 * (grain - 0.5);
+        let brush = self.brush.fbm(x * 2.2, v * 4.0, 5);
+        let mut washes = Washes::default();
+
+        // Thin white gaps left between the sky/sea washes and the land, here and there.
+        let gap = 1.5 * self.pixel * smoothstep(0.55, 0.7, self.edge.fbm(x * 14.0, v * 14.0, 2));
+        let reserve = -land_max - gap;
+
+        // --- Sky: graded wash, ultramarine at the top to pale cerulean and a warm glow at the horizon.
+        let sky_edge = (HORIZON + 0.004 - v).min(reserve).min(margin);
+        if sky_edge > -2.0 * self.pixel {
+            let height = (v / HORIZON).clamp(0.0, 1.0);
+            let cloud_zone = (-((v - 0.2) / 0.13).powi(2)).exp();
+            let cloudiness = self.cloud.fbm(x * 2.0 + 11.0, v * 5.0, 6);
+            let cloud = smoothstep(0.46, 0.62, cloudiness) * cloud_zone;
+            let profile = self.wash_profile(sky_edge, 0.45, 0.006);
+            let strokes = 0.7 + 0.6 * brush;
+            let blue = (0.3 + 0.85 * (1.0 - height).powf(1.3)) * strokes * (1.0 - 0.9 * cloud);
+            // A faint rim where the sky wash dried around the lifted cloud.
+            let cloud_rim = 1.0 + 1.2 * cloud * (1.0 - cloud);
+            washes.glaze_mix(
+                &p.sky_cerulean,
+                &p.sky_ultramarine,
+                (1.0 - height).powf(0.7),
+                blue * profile * granulation * cloud_rim,
+            );
+            washes.glaze(
+                &p.yellow_ochre,
+                0.22 * smoothstep(0.55, 1.0, height) * profile,
+            );
+            // Grey bellies of the clouds, mottled, heavier lower down.
+            let shade = self.cloud_shade.fbm(x * 4.0, v * 8.0, 5);
+            let belly = cloud * smoothstep(0.4, 0.65, shade) * (0.4 + 2.0 * (v - 0.1).max(0.0));
+            washes.glaze(&p.paynes_grey, 0.55 * belly * profile * granulation);
+        }
+
+        // --- Sea: layered, darker towards the viewer, horizontal brush streaks and lifted wave crests.
+        let sea_edge = (v - HORIZON).min(reserve).min(margin);
+        if sea_edge > -2.0 * self.pixel {
+            let depth = ((v - HORIZON) / (1.0 - HORIZON)).clamp(0.0, 1.0);
+            let streak = self.sea_streak.fbm(x * 3.0, v * 90.0, 5);
+            let crest = self.sea_crest.fbm(x * 9.0, v * 180.0, 3);
+            let lifted = 1.0 - 0.85 * smoothstep(0.64, 0.74, crest) * smoothstep(0.02, 0.12, depth);
+            let profile = self.wash_profile(sea_edge, 0.6, 0.004);
+            let density = (0.45 + 0.8 * depth.powf(0.8)) * (0.6 + 0.8 * streak) * lifted;
+            let hue = self.hue.fbm(x * 1.5, v * 6.0, 4);
+            washes.glaze_mix(
+                &p.sea_prussian,
+                &p.sea_green,
+                smoothstep(0.3, 0.7, hue),
+                density * profile * granulation,
+            );
+            // A greyer band just under the horizon, where the sea reflects the overcast.
+            washes.glaze(
+                &p.paynes_grey,
+                0.35 * (1.0 - smoothstep(0.0, 0.15, depth)) * profile,
+            );
+            // Reflections of the land masses: dark, streaky, fading away from the waterline.
+            let reflection = self.reflection(u, v) * (0.5 + streak) * lifted;
+            washes.glaze_mix(&p.hookers_green, &p.sea_prussian, 0.5, reflection * profile);
+        }
+
+        // --- Far island: one pale blue-grey wash.
+        if land.far > -2.0 * self.pixel {
+            let profile = self.wash_profile(land.far.min(margin), 0.7, 0.003);
+            washes.glaze_mix(
+                &p.paynes_grey,
+                &p.sky_ultramarine,
+                0.3,
+                0.42 * profile * granulation,
+            );
+        }
+
+        // --- Middle headland: greens muted by distance (more grey, less pigment), a dark shaded cliff face.
+        if land.middle > -2.0 * self.pixel {
+            let edge = land.middle.min(margin);
+            let profile = self.wash_profile(edge, 0.55, 0.004);
+            let hue = self.hue.fbm(x * 4.0, v * 4.0, 4);
+            let slope_strokes = self.brush.fbm(x * 5.0 - v * 3.0, v * 14.0, 4);
+            washes.glaze_mix(
+                &p.sap_green,
+                &p.yellow_green,
+                hue,
+                (0.55 + 0.4 * slope_strokes) * profile,
+            );
+            washes.glaze(&p.paynes_grey, 0.35 * profile * granulation);
+            let face_depth = self.horizontal(u - self.middle_face(v));
+            let rock = self.rock_weight(
+                face_depth,
+                v - self.middle_top(u),
+                Self::MIDDLE_BASE - v,
+                u,
+                v,
+                0.6,
+            );
+            washes.glaze_mix(
+                &p.sepia,
+                &p.paynes_grey,
+                0.6,
+                0.7 * rock * profile * granulation,
+            );
+        }
+
+        // --- Sea stacks: dark basalt with a green cap.
+        if land.stacks > -2.0 * self.pixel {
+            let profile = self.wash_profile(land.stacks.min(margin), 0.5, 0.003);
+            let cap = 1.0 - smoothstep(0.01, 0.03, land.stacks.min(v - 0.39));
+            let cap = cap * smoothstep(0.0, 0.015, Self::STACK_BASE - 0.1 - v);
+            let strata = self.strata_pattern(u, v);
+            washes.glaze_mix(
+                &p.sepia,
+                &p.paynes_grey,
+                0.55,
+                (0.65 + 0.35 * strata) * profile * granulation,
+            );
+            washes.glaze(&p.sap_green, 0.5 * cap * profile);
+        }
+
+        // --- Near headland: sunlit grass shoulder, darker slope, the basalt sea cliff in shade.
+        if land.near > -2.0 * self.pixel {
+            let edge = land.near.min(margin);
+            let profile = self.wash_profile(edge, 0.5, 0.005);
+            let hue = self.hue.fbm(x * 3.0 + 5.0, v * 3.0, 5);
+            let below_top = v - self.near_top(u);
+            let slope_strokes = self.brush.fbm(x * 4.0 + v * 6.0, v * 16.0 - x * 2.0, 5);
+            let grass = (0.75 + 0.55 * slope_strokes) * profile;
+            washes.glaze_mix(
+                &p.yellow_green,
+                &p.sap_green,
+                smoothstep(0.3, 0.7, hue),
+                grass,
+            );
+            washes.glaze(&p.yellow_ochre, 0.35 * (1.0 - hue) * profile);
+            // Second, darker glaze lower down the slope, with its own dried edge.
+            let shadow_edge = below_top - 0.05 - 0.05 * self.brush.fbm(x * 6.0, 3.3, 3)
+                + self.edge_jitter(u, v, 0.004);
+            let shadow = self.wash_profile(shadow_edge.min(edge), 0.5, 0.004);
+            washes.glaze(&p.hookers_green, (0.55 + 0.3 * slope_strokes) * shadow);
+            let face_depth = self.horizontal(self.near_face(v) - u);
+            let rock = self.rock_weight(face_depth, below_top, self.near_base(u) - v, u, v, 1.0);
+            washes.glaze_mix(
+                &p.sepia,
+                &p.paynes_grey,
+                0.45,
+                1.05 * rock * profile * granulation,
+            );
+            washes.glaze(&p.sky_ultramarine, 0.3 * rock * profile);
+        }
+
+        // Blooms move pigment, they do not add any; the paper margin stays clean.
+        let bloom = if margin > 0.0 {
+            self.bloom_factor(u, v)
+        } else {
+            1.0
+        };
+        let paper_grain = 1.0 - 0.06 * (grain - 0.5);
+        std::array::from_fn(|c| self.paper[c] * paper_grain * (-washes.absorbance[c] * bloom).exp())
+    }
+
+    /// Horizontal basalt layering: 1 on rock bands, lower on the grassy ledges between them.
+    fn strata_pattern(&self, u: f64, v: f64) -> f64 {
+        let wobble = self.strata.fbm(self.horizontal(u) * 3.0, v * 3.0, 4);
+        let phase = (v * 55.0 + 6.0 * wobble) * std::f64::consts::TAU;
+        smoothstep(-0.3, 0.5, phase.sin())
+    }
+
+    /// Weight (0–1) of the dark rock wash on a headland: strong on the sea cliff (within a noisy depth of the face
+    /// and along the waterline), broken by grassy ledges of the basalt strata, none on the grass shoulder.
+    fn rock_weight(
+        &self,
+        face_depth: f64,
+        below_top: f64,
+        above_base: f64,
+        u: f64,
+        v: f64,
+        scale: f64,
+    ) -> f64 {
+        let x = self.horizontal(u);
+        let reach = scale
+            * (0.03 + 0.09 * smoothstep(0.0, 0.3, below_top))
+            * (0.6 + 0.8 * self.strata.fbm(x * 5.0, v * 12.0, 4));
+        let face = smoothstep(0.0, 0.5 * self.pixel + 0.004, reach - face_depth);
+        let shore = smoothstep(
+            0.0,
+            0.006,
+            scale * 0.05 * (0.5 + self.strata.fbm(x * 14.0, 1.7, 3)) - above_base,
+        );
+        let grass_free = smoothstep(0.005, 0.03, below_top);
+        let ledges = 0.45 + 0.55 * self.strata_pattern(u, v);
+        face.max(shore) * grass_free * ledges
+    }
+
+    /// Density of the land's reflection in the sea at (u, v).
+    fn reflection(&self, u: f64, v: f64) -> f64 {
+        let fade = |below: f64, length: f64| {
+            if below > 0.0 {
+                (-below / length).exp()
+            } else {
+                0.0
+            }
+        };
+        let near = if u < self.near_face(self.near_base(u)) {
+            fade(v - self.near_base(u), 0.05)
+        } else {
+            0.0
+        };
+        let middle = if u > self.middle_face(Self::MIDDLE_BASE) {
+            fade(v - Self::MIDDLE_BASE, 0.03)
+        } else {
+            0.0
+        };
+        let stacks = Self::STACKS
+            .iter()
+            .map(|&(centre, half_width, _)| {
+                let across = self.horizontal((u - centre).abs());
+                if across < 1.1 * half_width {
+                    fade(v - Self::STACK_BASE, 0.035)
+                } else {
+                    0.0
+                }
+            })
+            .fold(0.0, f64::max);
+        0.9 * near + 0.5 * middle + 0.6 * stacks
+    }
+}
+
+/// A watercolour of a Faroese coast, `width` × `height` px, deterministic for a given `seed`.
+///
+/// The composition is fixed (sky over a horizon at 52 % of the height; a steep green headland on the left with a
+/// dark basalt sea cliff; a paler headland on the right; two sea stacks and a far island in the gap between them;
+/// the sea in front); the seed moves every brush mark, cloud, wash edge, bloom and grain of paper. See the module
+/// documentation for the model.
+pub fn faroe_landscape(width: u32, height: u32, seed: u64) -> Result<RgbImage, AssetError> {
+    check_size(width, height)?;
+    let painting = Painting::new(width, height, seed);
+    let mut image = RgbImage::new(width, height);
+    let (w, h) = (f64::from(width), f64::from(height));
+    image
+        .as_mut()
+        .par_chunks_mut(width as usize * 3)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let v = (y as f64 + 0.5) / h;
+            for (x, pixel) in row.chunks_exact_mut(3).enumerate() {
+                let u = (x as f64 + 0.5) / w;
+                pixel.copy_from_slice(&linear_to_srgb8(painting.reflectance(u, v)));
+            }
+        });
+    Ok(image)
+}
+
+/// Writes `faroe_flag.png` (1100 × 800) and `faroe_landscape.png` (1024 × 1024, seed 1) into `dir`, creating it
+/// if needed.
+pub fn write_assets(dir: &Path) -> Result<(), AssetError> {
+    std::fs::create_dir_all(dir).map_err(|source| AssetError::CreateDir {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let flag = faroe_flag(FLAG_ASSET_SIZE.0)?;
+    save_png(&flag, &dir.join(FLAG_FILE_NAME))?;
+    let (width, height) = LANDSCAPE_ASSET_SIZE;
+    let landscape = faroe_landscape(width, height, LANDSCAPE_ASSET_SEED)?;
+    save_png(&landscape, &dir.join(LANDSCAPE_FILE_NAME))
+}
+
+fn save_png(image: &RgbImage, path: &Path) -> Result<(), AssetError> {
+    image
+        .save_with_format(path, image::ImageFormat::Png)
+        .map_err(|source| AssetError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
+}

@@ -1,0 +1,395 @@
+//! The case study's frame pipeline, shared by the window and the command line:
+//! simulator → normals turned toward the light → thin-slab shading → a linear radiance image.
+//!
+//! Data flows one way: [`FlagScene`] owns the simulation and the mesh, [`FrameRenderer`] owns the GPU.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use sheer_cloth::Simulation;
+use sheer_normals::{Light, NormalUpdater};
+use sheer_slab::IrradianceConvention;
+use sheer_slab::render::{
+    Background, Camera, EvaluationPath, HeadlessRenderer, LinearImage, ShadingParams, SlabMesh,
+    Texture2d,
+};
+
+use crate::CliError;
+use crate::scene::{Convention, EvaluationPathName, Scene, ShadingModel};
+use crate::simulate::{flag_simulation, grid_uvs};
+
+/// Time spent in each stage of the last frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StageTimes {
+    pub simulation: Duration,
+    pub normals: Duration,
+    /// Shading: per-path evaluation, uploads, GPU work and waiting for it.
+    pub shading: Duration,
+    pub readback: Duration,
+}
+
+/// The simulated flag (or the static sheet) of a scene, with its normals turned toward the light.
+pub struct FlagScene {
+    pub scene: Scene,
+    simulation: Option<Simulation>,
+    updater: NormalUpdater,
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    pub mesh: SlabMesh,
+    /// Scene time, s.
+    pub time: f32,
+}
+
+impl FlagScene {
+    pub fn new(scene: Scene) -> Result<FlagScene, CliError> {
+        let (simulation, mesh) = match &scene.static_sheet {
+            Some(sheet) => {
+                let tilt = sheet.tilt_degrees.to_radians();
+                let rotation = glam::Quat::from_rotation_x(tilt);
+                let centre = Vec3::from_array(sheet.centre);
+                let u_edge = rotation * Vec3::new(sheet.size[0], 0.0, 0.0);
+                let v_edge = rotation * Vec3::new(0.0, sheet.size[1], 0.0);
+                let mesh = SlabMesh::flat_sheet(
+                    centre - 0.5 * (u_edge + v_edge),
+                    u_edge,
+                    v_edge,
+                    rotation * Vec3::Z,
+                    sheet.segments,
+                    sheet.segments,
+                )
+                .map_err(|e| CliError::new(format!("static sheet: {e}")))?;
+                (None, mesh)
+            }
+            None => {
+                let sim = flag_simulation(&scene)?;
+                let mut mesh = SlabMesh {
+                    positions: vec![[0.0; 3]; sim.particle_count()],
+                    normals: vec![[0.0, 0.0, 1.0]; sim.particle_count()],
+                    uvs: grid_uvs(scene.flag.columns, scene.flag.rows),
+                    indices: sim.triangles().iter().flatten().copied().collect(),
+                };
+                for (p, q) in mesh.positions.iter_mut().zip(sim.positions()) {
+                    *p = q.as_vec3().to_array();
+                }
+                (Some(sim), mesh)
+            }
+        };
+        let updater = NormalUpdater::new(mesh.positions.len(), &mesh.indices)
+            .map_err(|e| CliError::new(format!("normals: {e}")))?;
+        let n = mesh.positions.len();
+        let mut flag = FlagScene {
+            scene,
+            simulation,
+            updater,
+            positions: mesh
+                .positions
+                .iter()
+                .map(|p| Vec3::from_array(*p))
+                .collect(),
+            normals: vec![Vec3::Z; n],
+            mesh,
+            time: 0.0,
+        };
+        flag.update_normals()?;
+        Ok(flag)
+    }
+
+    /// Light position now, m.
+    pub fn light_position(&self) -> Vec3 {
+        Vec3::from_array(self.scene.light.position(self.time))
+    }
+
+    /// Back to time 0 and the flag at rest.
+    pub fn reset(&mut self) -> Result<(), CliError> {
+        if let Some(sim) = &mut self.simulation {
+            sim.reset();
+        }
+        self.time = 0.0;
+        self.copy_positions();
+        self.update_normals()
+    }
+
+    fn copy_positions(&mut self) {
+        if let Some(sim) = &self.simulation {
+            sim.write_positions_f32(&mut self.positions);
+            for (p, q) in self.mesh.positions.iter_mut().zip(&self.positions) {
+                *p = q.to_array();
+            }
+        }
+    }
+
+    pub fn update_normals(&mut self) -> Result<(), CliError> {
+        if self.simulation.is_none() {
+            return Ok(()); // the static sheet's normals are set once (the renderer re-orients them)
+        }
+        let light = Light::Point {
+            position: self.light_position(),
+        };
+        self.updater
+            .update(&self.positions, &light, &mut self.normals)
+            .map_err(|e| CliError::new(format!("normals: {e}")))?;
+        for (n, m) in self.mesh.normals.iter_mut().zip(&self.normals) {
+            *n = m.to_array();
+        }
+        Ok(())
+    }
+
+    /// Advances the scene by `dt` seconds: simulation step, then normals. A diverged step is reported
+    /// and leaves the last good state.
+    pub fn advance(&mut self, dt: f32, times: &mut StageTimes) -> Result<(), CliError> {
+        let start = Instant::now();
+        if let Some(sim) = &mut self.simulation {
+            sim.step(f64::from(dt))
+                .map_err(|e| CliError::new(format!("simulation: {e}")))?;
+        }
+        self.time += dt;
+        self.copy_positions();
+        times.simulation = start.elapsed();
+        let start = Instant::now();
+        self.update_normals()?;
+        times.normals = start.elapsed();
+        Ok(())
+    }
+
+    /// Replaces the simulation parameters mid-run (the cloth carries on from where it is).
+    pub fn set_simulation_params(
+        &mut self,
+        params: sheer_cloth::SimParams,
+    ) -> Result<(), CliError> {
+        if let Some(sim) = &mut self.simulation {
+            sim.set_params(params.clone())
+                .map_err(|e| CliError::new(e.to_string()))?;
+        }
+        self.scene.simulation = params;
+        Ok(())
+    }
+}
+
+/// Decodes an sRGB PNG into linear [0, 1] texels.
+fn load_linear_texture(path: &Path, size: Option<(u32, u32)>) -> Result<Texture2d, CliError> {
+    let image = image::open(path)
+        .map_err(|e| CliError::new(format!("cannot read image {}: {e}", path.display())))?
+        .to_rgb8();
+    let image = match size {
+        Some((w, h)) if image.dimensions() != (w, h) => {
+            image::imageops::resize(&image, w, h, image::imageops::FilterType::Triangle)
+        }
+        _ => image,
+    };
+    let texels = image
+        .pixels()
+        .map(|p| {
+            let [r, g, b] = p.0.map(srgb_to_linear);
+            [r, g, b, 1.0]
+        })
+        .collect();
+    Texture2d::new(image.width(), image.height(), texels)
+        .map_err(|e| CliError::new(format!("{}: {e}", path.display())))
+}
+
+/// The sRGB transfer function inverted (IEC 61966-2-1).
+pub fn srgb_to_linear(value: u8) -> f32 {
+    let c = f32::from(value) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The GPU side: renderer, textures and the scene's shading parameters.
+pub struct FrameRenderer {
+    renderer: HeadlessRenderer,
+    shading: ShadingParams,
+    background: Background,
+}
+
+impl FrameRenderer {
+    /// Finds an adapter (Mesa lavapipe or llvmpipe without a GPU) and loads the scene's textures.
+    pub fn new(scene: &Scene) -> Result<FrameRenderer, CliError> {
+        let (width, height) = (scene.render.width, scene.render.height);
+        let renderer = HeadlessRenderer::new(width, height)
+            .map_err(|e| CliError::new(format!("renderer: {e}")))?;
+        let albedo_texture = match (&scene.static_sheet, &scene.shading.albedo_texture) {
+            (Some(sheet), _) => {
+                let [r, g, b] = sheet.albedo;
+                Texture2d::uniform([r, g, b, 1.0]).map_err(|e| CliError::new(e.to_string()))?
+            }
+            (None, Some(path)) if !path.is_empty() => {
+                load_linear_texture(&scene.resolve(path), None)?
+            }
+            (None, _) => Texture2d::uniform([1.0; 4]).map_err(|e| CliError::new(e.to_string()))?,
+        };
+        let thickness_texture = match &scene.shading.thickness_texture {
+            Some(path) if !path.is_empty() => {
+                Some(load_linear_texture(&scene.resolve(path), None)?)
+            }
+            _ => None,
+        };
+        let background = match (&scene.static_sheet, &scene.background.image) {
+            (None, Some(path)) if !path.is_empty() => {
+                let mut texture = load_linear_texture(&scene.resolve(path), Some((width, height)))?;
+                let scale = scene.background.radiance_scale;
+                let texels: Vec<[f32; 4]> = texture
+                    .texels()
+                    .iter()
+                    .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, 1.0])
+                    .collect();
+                texture = Texture2d::new(width, height, texels)
+                    .map_err(|e| CliError::new(e.to_string()))?;
+                Background::Image(texture)
+            }
+            _ => Background::Uniform(scene.background.colour),
+        };
+        let shading = ShadingParams {
+            optical_thickness: scene.shading.optical_thickness,
+            albedo_scale: scene.shading.albedo_scale,
+            albedo_texture,
+            thickness_texture,
+            light_position: Vec3::from_array(scene.light.position(0.0)),
+            light_flux: scene.light.flux,
+            convention: match scene.shading.convention {
+                Convention::NormalToBeam => IrradianceConvention::NormalToBeam,
+                Convention::PaperLiteral => IrradianceConvention::PaperLiteral,
+            },
+            exposure: scene.shading.exposure,
+            baseline_transmittance: scene.shading.baseline_alpha,
+        };
+        shading
+            .validate()
+            .map_err(|e| CliError::new(format!("shading: {e}")))?;
+        Ok(FrameRenderer {
+            renderer,
+            shading,
+            background,
+        })
+    }
+
+    /// Which GPU adapter renders.
+    pub fn adapter(&self) -> &str {
+        self.renderer.adapter_description()
+    }
+
+    /// Updates the material parameters from the scene (τ1, Λ scale, flux, convention, exposure, α).
+    pub fn update_shading(&mut self, scene: &Scene) -> Result<(), CliError> {
+        let mut shading = self.shading.clone();
+        shading.optical_thickness = scene.shading.optical_thickness;
+        shading.albedo_scale = scene.shading.albedo_scale;
+        shading.light_flux = scene.light.flux;
+        shading.exposure = scene.shading.exposure;
+        shading.baseline_transmittance = scene.shading.baseline_alpha;
+        shading.convention = match scene.shading.convention {
+            Convention::NormalToBeam => IrradianceConvention::NormalToBeam,
+            Convention::PaperLiteral => IrradianceConvention::PaperLiteral,
+        };
+        shading
+            .validate()
+            .map_err(|e| CliError::new(format!("shading: {e}")))?;
+        self.shading = shading;
+        Ok(())
+    }
+
+    pub fn exposure(&self) -> f32 {
+        self.shading.exposure
+    }
+
+    /// Renders the flag as the scene's shading model says, and draws the light marker.
+    pub fn render(
+        &mut self,
+        flag: &FlagScene,
+        times: &mut StageTimes,
+    ) -> Result<LinearImage, CliError> {
+        let scene = &flag.scene;
+        let thin_slab = match scene.shading.path {
+            EvaluationPathName::Fragment => EvaluationPath::PerFragment,
+            EvaluationPathName::Vertex => EvaluationPath::PerVertex,
+            EvaluationPathName::Cpu => EvaluationPath::Cpu,
+        };
+        let mut image = match scene.shading.model {
+            ShadingModel::ThinSlab => self.render_path(flag, thin_slab, times)?,
+            ShadingModel::Baseline => self.render_path(flag, EvaluationPath::Baseline, times)?,
+            ShadingModel::Split => {
+                let left = self.render_path(flag, EvaluationPath::Baseline, times)?;
+                let mut right = self.render_path(flag, thin_slab, times)?;
+                let half = right.width / 2;
+                for y in 0..right.height {
+                    for x in 0..half {
+                        let i = (y * right.width + x) as usize;
+                        right.pixels[i] = left.pixels[i];
+                    }
+                }
+                right
+            }
+        };
+        if scene.light.marker {
+            draw_light_marker(&mut image, &camera(scene), flag.light_position());
+        }
+        Ok(image)
+    }
+
+    fn render_path(
+        &mut self,
+        flag: &FlagScene,
+        path: EvaluationPath,
+        times: &mut StageTimes,
+    ) -> Result<LinearImage, CliError> {
+        self.shading.light_position = flag.light_position();
+        let start = Instant::now();
+        self.renderer
+            .render_frame(
+                &flag.mesh,
+                &camera(&flag.scene),
+                &self.shading,
+                &self.background,
+                path,
+            )
+            .map_err(|e| CliError::new(format!("render: {e}")))?;
+        times.shading += start.elapsed();
+        let start = Instant::now();
+        let image = self
+            .renderer
+            .read_target()
+            .map_err(|e| CliError::new(format!("render: {e}")))?;
+        times.readback += start.elapsed();
+        Ok(image)
+    }
+}
+
+/// The scene's camera as the renderer takes it.
+pub fn camera(scene: &Scene) -> Camera {
+    Camera {
+        eye: Vec3::from_array(scene.camera.position),
+        target: Vec3::from_array(scene.camera.target),
+        up: Vec3::Y,
+        vertical_fov: scene.camera.vertical_fov_degrees.to_radians(),
+        near: 0.05,
+        far: 100.0,
+    }
+}
+
+/// A small bright disc where the light is (drawn over the frame; it marks the light, it does not
+/// model it).
+fn draw_light_marker(image: &mut LinearImage, camera: &Camera, light: Vec3) {
+    let clip = camera.view_projection(image.width, image.height) * light.extend(1.0);
+    if clip.w <= 0.0 {
+        return; // behind the camera
+    }
+    let ndc = clip.truncate() / clip.w;
+    let cx = (ndc.x + 1.0) * 0.5 * image.width as f32;
+    let cy = (1.0 - ndc.y) * 0.5 * image.height as f32;
+    let radius = (image.width.min(image.height) as f32 / 100.0).max(3.0);
+    let (x0, x1) = ((cx - radius).floor().max(0.0), (cx + radius).ceil());
+    let (y0, y1) = ((cy - radius).floor().max(0.0), (cy + radius).ceil());
+    for y in (y0 as u32)..(y1.min(image.height as f32) as u32) {
+        for x in (x0 as u32)..(x1.min(image.width as f32) as u32) {
+            let d = ((x as f32 + 0.5 - cx).powi(2) + (y as f32 + 0.5 - cy).powi(2)).sqrt();
+            let i = (y * image.width + x) as usize;
+            if d <= radius {
+                image.pixels[i] = [4.0, 3.6, 2.4, image.pixels[i][3]];
+            } else if d <= radius + 1.5 {
+                image.pixels[i] = [0.0, 0.0, 0.0, image.pixels[i][3]];
+            }
+        }
+    }
+}

@@ -1,0 +1,301 @@
+//! `sheer render` (one frame or a sequence, PNG and linear OpenEXR) and `sheer figure2` (the paper's
+//! figure 2: back-lit and front-lit, baseline and thin-slab, as one labelled 2×2 image).
+
+use std::path::{Path, PathBuf};
+
+use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
+use clap::{Args, ValueEnum};
+use image::{Rgb, RgbImage};
+use sheer_slab::render::LinearImage;
+
+use crate::CliError;
+use crate::frame::{FlagScene, FrameRenderer, StageTimes};
+use crate::scene::{Scene, ShadingModel};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ImageFormat {
+    /// 8-bit sRGB after exposure.
+    Png,
+    /// Linear radiance, 32-bit float (OpenEXR), before exposure.
+    Exr,
+    /// Both, side by side.
+    Both,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML); default: the shipped default scene.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Output image for a single frame (.png or .exr).
+    #[arg(long, conflicts_with = "out_dir")]
+    pub out: Option<PathBuf>,
+    /// Render a sequence of this many frames (1/fps apart) into --out-dir.
+    #[arg(long, requires = "out_dir")]
+    pub frames: Option<u32>,
+    /// Directory for frame_0000.png … of a sequence.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    /// Image format of a sequence.
+    #[arg(long, value_enum, default_value_t = ImageFormat::Png)]
+    pub format: ImageFormat,
+    /// Scene time of a single frame, s (the flag is simulated up to it).
+    #[arg(long, default_value_t = 2.0)]
+    pub time: f32,
+}
+
+/// Saves a linear image as PNG (exposure, sRGB) or OpenEXR (linear float), by extension.
+pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(), CliError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let result = match extension.as_deref() {
+        Some("png") => image.save_png(path, exposure),
+        Some("exr") => {
+            let data: Vec<f32> = image
+                .pixels
+                .iter()
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            image::Rgb32FImage::from_raw(image.width, image.height, data)
+                .ok_or_else(|| CliError::new("internal: image size mismatch"))?
+                .save(path)
+        }
+        _ => {
+            return Err(CliError::new(format!(
+                "{}: unknown image type (use .png or .exr)",
+                path.display()
+            )));
+        }
+    };
+    result.map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))
+}
+
+/// Simulates the scene up to `time` seconds at its frame rate.
+pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
+    let dt = 1.0 / flag.scene.render.fps;
+    let steps = (time / dt).round() as u32;
+    let mut times = StageTimes::default();
+    for _ in 0..steps {
+        flag.advance(dt, &mut times)?;
+    }
+    Ok(())
+}
+
+pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
+    let scene = crate::load_scene(args.scene.as_deref())?;
+    if !(args.time.is_finite() && args.time >= 0.0) {
+        return Err(CliError::new(format!(
+            "--time must be ≥ 0 s, got {}",
+            args.time
+        )));
+    }
+    let mut renderer = FrameRenderer::new(&scene)?;
+    let mut flag = FlagScene::new(scene)?;
+    let exposure = renderer.exposure();
+    let mut times = StageTimes::default();
+    match (&args.out, &args.out_dir) {
+        (Some(out), None) => {
+            advance_to(&mut flag, args.time)?;
+            let image = renderer.render(&flag, &mut times)?;
+            save_image(&image, out, exposure)?;
+            eprintln!("wrote {} ({})", out.display(), renderer.adapter());
+        }
+        (None, Some(dir)) => {
+            let frames = args.frames.unwrap_or(1);
+            if frames == 0 {
+                return Err(CliError::new("--frames must be ≥ 1"));
+            }
+            std::fs::create_dir_all(dir)
+                .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
+            let dt = 1.0 / flag.scene.render.fps;
+            let progress = crate::progress_bar(u64::from(frames), "rendering");
+            for frame in 0..frames {
+                if frame > 0 {
+                    flag.advance(dt, &mut times)?;
+                }
+                let image = renderer.render(&flag, &mut times)?;
+                let stem = dir.join(format!("frame_{frame:04}"));
+                if matches!(args.format, ImageFormat::Png | ImageFormat::Both) {
+                    save_image(&image, &stem.with_extension("png"), exposure)?;
+                }
+                if matches!(args.format, ImageFormat::Exr | ImageFormat::Both) {
+                    save_image(&image, &stem.with_extension("exr"), exposure)?;
+                }
+                progress.inc(1);
+            }
+            progress.finish_and_clear();
+            eprintln!(
+                "wrote {frames} frames to {} ({})",
+                dir.display(),
+                renderer.adapter()
+            );
+        }
+        _ => {
+            return Err(CliError::new(
+                "give --out FILE, or --frames N --out-dir DIR",
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct Figure2Args {
+    /// Output PNG.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Scene file (TOML); default: the shipped default scene.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Scene time at which the flag is captured, s.
+    #[arg(long, default_value_t = 2.0)]
+    pub time: f32,
+    /// Also write the four panels as linear OpenEXR (RGBA, alpha = transmittance through the flag):
+    /// baseline_back.exr, baseline_front.exr, thin_slab_back.exr, thin_slab_front.exr.
+    #[arg(long)]
+    pub linear_dir: Option<PathBuf>,
+}
+
+/// File stems of the panels, in [`figure2_panels`] order.
+pub const PANEL_NAMES: [&str; 4] = [
+    "baseline_back",
+    "baseline_front",
+    "thin_slab_back",
+    "thin_slab_front",
+];
+
+/// Saves a linear image with its alpha (the transmittance) as RGBA OpenEXR.
+pub fn save_exr_rgba(image: &LinearImage, path: &Path) -> Result<(), CliError> {
+    let data: Vec<f32> = image.pixels.iter().flatten().copied().collect();
+    image::Rgba32FImage::from_raw(image.width, image.height, data)
+        .ok_or_else(|| CliError::new("internal: image size mismatch"))?
+        .save(path)
+        .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))
+}
+
+/// Light angles (rad, 0 = on the camera's side) of the figure's two columns.
+pub const BACK_LIT_PHASE: f32 = std::f32::consts::PI + 0.5;
+pub const FRONT_LIT_PHASE: f32 = 0.6;
+
+/// The four panels of figure 2, in reading order: (baseline, back-lit), (baseline, front-lit),
+/// (thin-slab, back-lit), (thin-slab, front-lit), as linear images of the scene's size.
+pub fn figure2_panels(scene: &Scene, time: f32) -> Result<[LinearImage; 4], CliError> {
+    let mut scene = scene.clone();
+    scene.light.period = 0.0; // the light holds still at each panel's angle
+    let mut flag = FlagScene::new(scene.clone())?;
+    advance_to(&mut flag, time)?;
+    let mut panels = Vec::with_capacity(4);
+    let mut renderer = FrameRenderer::new(&scene)?;
+    for model in [ShadingModel::Baseline, ShadingModel::ThinSlab] {
+        for phase in [BACK_LIT_PHASE, FRONT_LIT_PHASE] {
+            flag.scene.shading.model = model;
+            if model == ShadingModel::ThinSlab {
+                // The paper's figure: Λ = 1, τ1 = 2.
+                flag.scene.shading.optical_thickness = [2.0; 3];
+                flag.scene.shading.albedo_scale = [1.0; 3];
+            }
+            flag.scene.light.phase = phase;
+            // Turn the normals toward this panel's light without moving the cloth.
+            flag.update_normals()?;
+            renderer.update_shading(&flag.scene)?;
+            panels.push(renderer.render(&flag, &mut StageTimes::default())?);
+        }
+    }
+    panels
+        .try_into()
+        .map_err(|_| CliError::new("internal: expected four panels"))
+}
+
+/// Draws `text` in white with a dark outline at (x, y) (top-left of the line), `size` pixels high.
+pub fn draw_label(image: &mut RgbImage, text: &str, x: f32, y: f32, size: f32) {
+    let Ok(font) = FontRef::try_from_slice(epaint_default_fonts::UBUNTU_LIGHT) else {
+        return;
+    };
+    let scaled = font.as_scaled(PxScale::from(size));
+    for (offset, colour) in [
+        ((1.0, 1.0), Rgb::<u8>([0, 0, 0])),
+        ((0.0, 0.0), Rgb::<u8>([255, 255, 255])),
+    ] {
+        let mut caret = x + offset.0;
+        let baseline = y + offset.1 + scaled.ascent();
+        let mut previous = None;
+        for ch in text.chars() {
+            let id = font.glyph_id(ch);
+            if let Some(p) = previous {
+                caret += scaled.kern(p, id);
+            }
+            let glyph = id.with_scale_and_position(size, ab_glyph::point(caret, baseline));
+            caret += scaled.h_advance(id);
+            previous = Some(id);
+            if let Some(outlined) = font.outline_glyph(glyph) {
+                let bounds = outlined.px_bounds();
+                outlined.draw(|gx, gy, coverage| {
+                    let px = bounds.min.x as i64 + i64::from(gx);
+                    let py = bounds.min.y as i64 + i64::from(gy);
+                    if px >= 0
+                        && py >= 0
+                        && (px as u32) < image.width()
+                        && (py as u32) < image.height()
+                    {
+                        let pixel = image.get_pixel_mut(px as u32, py as u32);
+                        for c in 0..3 {
+                            let blended = f32::from(pixel[c]) * (1.0 - coverage)
+                                + f32::from(colour[c]) * coverage;
+                            pixel[c] = blended.round() as u8;
+                        }
+                    }
+                });
+            }
+        }
+    }
+}
+
+/// The 2×2 figure with labels, as an sRGB image.
+pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32) -> RgbImage {
+    let (w, h) = (panels[0].width, panels[0].height);
+    let mut figure = RgbImage::new(2 * w, 2 * h);
+    let labels = [
+        "baseline, α = 0.2 — back-lit",
+        "baseline, α = 0.2 — front-lit",
+        "thin slab, Λ = 1, τ₁ = 2 — back-lit",
+        "thin slab, Λ = 1, τ₁ = 2 — front-lit",
+    ];
+    for (k, panel) in panels.iter().enumerate() {
+        let (ox, oy) = ((k as u32 % 2) * w, (k as u32 / 2) * h);
+        let bytes = panel.to_srgb8(exposure);
+        for y in 0..h {
+            for x in 0..w {
+                let i = 4 * (y * w + x) as usize;
+                figure.put_pixel(ox + x, oy + y, Rgb([bytes[i], bytes[i + 1], bytes[i + 2]]));
+            }
+        }
+        draw_label(
+            &mut figure,
+            labels[k],
+            ox as f32 + 10.0,
+            oy as f32 + 8.0,
+            (h as f32 / 20.0).max(12.0),
+        );
+    }
+    figure
+}
+
+pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
+    let scene = crate::load_scene(args.scene.as_deref())?;
+    let panels = figure2_panels(&scene, args.time)?;
+    if let Some(dir) = &args.linear_dir {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
+        for (panel, name) in panels.iter().zip(PANEL_NAMES) {
+            save_exr_rgba(panel, &dir.join(format!("{name}.exr")))?;
+        }
+    }
+    let figure = figure2_image(&panels, scene.shading.exposure);
+    figure
+        .save(&args.out)
+        .map_err(|e| CliError::new(format!("cannot write {}: {e}", args.out.display())))?;
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}

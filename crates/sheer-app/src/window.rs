@@ -1,0 +1,540 @@
+//! The window (eframe + egui on wgpu): the waving flag with a side panel of every knob, a live readout of
+//! the time each stage takes, mouse orbit and zoom, screenshots, and a scripted mode
+//! (`sheer --frames N --screenshot F`) that runs N frames, saves the whole window and exits.
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use eframe::egui;
+use sheer_cloth::Method;
+
+use crate::CliError;
+use crate::frame::{FlagScene, FrameRenderer, StageTimes};
+use crate::scene::{EvaluationPathName, Scene, ShadingModel};
+
+/// Options of the window from the command line.
+#[derive(Debug, Clone, Default)]
+pub struct WindowOptions {
+    pub scene: Option<PathBuf>,
+    /// Run this many frames, then (with `screenshot`) save the window and exit.
+    pub frames: Option<u32>,
+    pub screenshot: Option<PathBuf>,
+}
+
+/// A number typed into the panel: kept as text while edited, applied only when it parses and passes
+/// its check; otherwise refused with a message.
+struct NumberField {
+    label: &'static str,
+    text: String,
+    error: Option<String>,
+}
+
+impl NumberField {
+    fn new(label: &'static str, value: f64) -> Self {
+        NumberField {
+            label,
+            text: format!("{value}"),
+            error: None,
+        }
+    }
+
+    /// Shows the field; returns the new value when one was entered and accepted.
+    fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        check: impl Fn(f64) -> Result<(), String>,
+    ) -> Option<f64> {
+        let mut accepted = None;
+        ui.horizontal(|ui| {
+            ui.label(self.label);
+            let response = ui.add(egui::TextEdit::singleline(&mut self.text).desired_width(70.0));
+            if response.lost_focus() {
+                match self.text.trim().parse::<f64>() {
+                    Ok(value) if value.is_finite() => match check(value) {
+                        Ok(()) => {
+                            self.error = None;
+                            accepted = Some(value);
+                        }
+                        Err(message) => self.error = Some(message),
+                    },
+                    _ => self.error = Some(format!("`{}` is not a number", self.text.trim())),
+                }
+            }
+        });
+        if let Some(error) = &self.error {
+            ui.colored_label(egui::Color32::from_rgb(255, 110, 110), error);
+        }
+        accepted
+    }
+}
+
+fn in_range(low: f64, high: f64) -> impl Fn(f64) -> Result<(), String> {
+    move |v| {
+        if v >= low && v <= high {
+            Ok(())
+        } else {
+            Err(format!("refused: must lie in [{low}, {high}]"))
+        }
+    }
+}
+
+struct Fields {
+    optical_thickness: NumberField,
+    albedo_scale: NumberField,
+    flux: NumberField,
+    radius: NumberField,
+    period: NumberField,
+    wind_speed: NumberField,
+    wind_direction: NumberField,
+    gusts: NumberField,
+    substeps: NumberField,
+    iterations: NumberField,
+    columns: NumberField,
+}
+
+pub struct SheerApp {
+    flag: FlagScene,
+    renderer: FrameRenderer,
+    texture: Option<egui::TextureHandle>,
+    fields: Fields,
+    paused: bool,
+    step_once: bool,
+    notice: Option<String>,
+    times: StageTimes,
+    frame_history: VecDeque<f32>,
+    last_frame: Instant,
+    frames_run: u32,
+    options: WindowOptions,
+    screenshot_requested: bool,
+    screenshot_done: Arc<Mutex<Option<Result<PathBuf, String>>>>,
+    // Camera orbit about its target: azimuth and elevation (rad) and distance (m).
+    orbit: (f32, f32, f32),
+}
+
+fn orbit_of(scene: &Scene) -> (f32, f32, f32) {
+    let eye = glam::Vec3::from_array(scene.camera.position);
+    let target = glam::Vec3::from_array(scene.camera.target);
+    let d = eye - target;
+    let distance = d.length();
+    (d.x.atan2(d.z), (d.y / distance).asin(), distance)
+}
+
+impl SheerApp {
+    pub fn new(scene: Scene, options: WindowOptions) -> Result<SheerApp, CliError> {
+        let renderer = FrameRenderer::new(&scene)?;
+        let orbit = orbit_of(&scene);
+        let wind = scene.simulation.wind;
+        let speed = wind.velocity.length();
+        let fields = Fields {
+            optical_thickness: NumberField::new(
+                "τ₁",
+                f64::from(scene.shading.optical_thickness[0]),
+            ),
+            albedo_scale: NumberField::new("Λ scale", f64::from(scene.shading.albedo_scale[0])),
+            flux: NumberField::new("flux Φ (W)", f64::from(scene.light.flux)),
+            radius: NumberField::new("orbit radius (m)", f64::from(scene.light.radius)),
+            period: NumberField::new("orbit period (s)", f64::from(scene.light.period)),
+            wind_speed: NumberField::new("wind speed (m/s)", speed),
+            wind_direction: NumberField::new(
+                "direction (°)",
+                wind.velocity.z.atan2(wind.velocity.x).to_degrees(),
+            ),
+            gusts: NumberField::new("gusts", wind.gust_strength),
+            substeps: NumberField::new("sub-steps", f64::from(scene.simulation.method.substeps())),
+            iterations: NumberField::new(
+                "iterations",
+                f64::from(scene.simulation.method.iterations()),
+            ),
+            columns: NumberField::new("grid columns", scene.flag.columns as f64),
+        };
+        Ok(SheerApp {
+            flag: FlagScene::new(scene)?,
+            renderer,
+            texture: None,
+            fields,
+            paused: false,
+            step_once: false,
+            notice: None,
+            times: StageTimes::default(),
+            frame_history: VecDeque::with_capacity(240),
+            last_frame: Instant::now(),
+            frames_run: 0,
+            options,
+            screenshot_requested: false,
+            screenshot_done: Arc::new(Mutex::new(None)),
+            orbit,
+        })
+    }
+
+    fn apply_orbit(&mut self) {
+        let (azimuth, elevation, distance) = self.orbit;
+        let target = glam::Vec3::from_array(self.flag.scene.camera.target);
+        let offset = distance
+            * glam::Vec3::new(
+                azimuth.sin() * elevation.cos(),
+                elevation.sin(),
+                azimuth.cos() * elevation.cos(),
+            );
+        self.flag.scene.camera.position = (target + offset).to_array();
+    }
+
+    /// Rebuilds the flag with the scene's current grid and parameters.
+    fn rebuild(&mut self) {
+        match FlagScene::new(self.flag.scene.clone()) {
+            Ok(flag) => self.flag = flag,
+            Err(e) => self.notice = Some(format!("rebuild refused: {e}")),
+        }
+    }
+
+    fn advance_and_render(&mut self, ctx: &egui::Context) {
+        let dt = 1.0 / self.flag.scene.render.fps;
+        let mut times = StageTimes::default();
+        if !self.paused || self.step_once {
+            self.step_once = false;
+            if let Err(error) = self.flag.advance(dt, &mut times) {
+                // Never show a diverged mesh: back to rest, and say so.
+                self.notice = Some(format!("{error} — the flag was reset"));
+                if let Err(e) = self.flag.reset() {
+                    self.notice = Some(e.to_string());
+                }
+            }
+        }
+        match self.renderer.render(&self.flag, &mut times) {
+            Ok(image) => {
+                let bytes = image.to_srgb8(self.renderer.exposure());
+                let colour = egui::ColorImage::from_rgba_unmultiplied(
+                    [image.width as usize, image.height as usize],
+                    &bytes,
+                );
+                match &mut self.texture {
+                    Some(texture) => texture.set(colour, egui::TextureOptions::LINEAR),
+                    None => {
+                        self.texture =
+                            Some(ctx.load_texture("frame", colour, egui::TextureOptions::LINEAR))
+                    }
+                }
+            }
+            Err(error) => self.notice = Some(error.to_string()),
+        }
+        self.times = times;
+        let now = Instant::now();
+        let frame_ms = (now - self.last_frame).as_secs_f32() * 1e3;
+        self.last_frame = now;
+        if self.frame_history.len() == 240 {
+            self.frame_history.pop_front();
+        }
+        self.frame_history.push_back(frame_ms);
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("sheer");
+        ui.label("Thin cloth as a thin slab (Frisvad et al. 2005)");
+        ui.separator();
+        let mut shading_changed = false;
+        ui.collapsing("Shading", |ui| {
+            let s = &mut self.flag.scene.shading;
+            ui.horizontal(|ui| {
+                ui.selectable_value(&mut s.model, ShadingModel::ThinSlab, "thin slab");
+                ui.selectable_value(&mut s.model, ShadingModel::Baseline, "baseline");
+                ui.selectable_value(&mut s.model, ShadingModel::Split, "split");
+            });
+            ui.horizontal(|ui| {
+                ui.label("path");
+                ui.selectable_value(&mut s.path, EvaluationPathName::Fragment, "fragment");
+                ui.selectable_value(&mut s.path, EvaluationPathName::Vertex, "vertex");
+                ui.selectable_value(&mut s.path, EvaluationPathName::Cpu, "CPU");
+            });
+            if let Some(v) = self.fields.optical_thickness.show(ui, in_range(1e-3, 50.0)) {
+                s.optical_thickness = [v as f32; 3];
+                shading_changed = true;
+            }
+            if let Some(v) = self.fields.albedo_scale.show(ui, in_range(0.0, 1.0)) {
+                s.albedo_scale = [v as f32; 3];
+                shading_changed = true;
+            }
+        });
+        ui.collapsing("Light", |ui| {
+            let l = &mut self.flag.scene.light;
+            if let Some(v) = self.fields.flux.show(ui, in_range(0.0, 1e4)) {
+                l.flux = v as f32;
+                shading_changed = true;
+            }
+            if let Some(v) = self.fields.radius.show(ui, in_range(0.05, 20.0)) {
+                l.radius = v as f32;
+            }
+            if let Some(v) = self.fields.period.show(ui, in_range(-600.0, 600.0)) {
+                // Keep the light where it is when the speed changes.
+                let t = self.flag.time;
+                let old = if l.period == 0.0 {
+                    0.0
+                } else {
+                    std::f32::consts::TAU * t / l.period
+                };
+                let new = if v == 0.0 {
+                    0.0
+                } else {
+                    std::f32::consts::TAU * t / v as f32
+                };
+                l.phase += old - new;
+                l.period = v as f32;
+            }
+        });
+        ui.collapsing("Wind", |ui| {
+            let mut params = self.flag.scene.simulation.clone();
+            let mut changed = false;
+            let speed = params.wind.velocity.length();
+            let direction = params.wind.velocity.z.atan2(params.wind.velocity.x);
+            let set = |speed: f64, direction: f64| {
+                sheer_cloth::glam::DVec3::new(speed * direction.cos(), 0.0, speed * direction.sin())
+            };
+            if let Some(v) = self.fields.wind_speed.show(ui, in_range(0.0, 40.0)) {
+                params.wind.velocity = set(v, direction);
+                changed = true;
+            }
+            if let Some(v) = self.fields.wind_direction.show(ui, in_range(-360.0, 360.0)) {
+                params.wind.velocity = set(speed, v.to_radians());
+                changed = true;
+            }
+            if let Some(v) = self.fields.gusts.show(ui, in_range(0.0, 2.0)) {
+                params.wind.gust_strength = v;
+                changed = true;
+            }
+            if changed && let Err(e) = self.flag.set_simulation_params(params) {
+                self.notice = Some(e.to_string());
+            }
+        });
+        ui.collapsing("Simulation", |ui| {
+            let mut params = self.flag.scene.simulation.clone();
+            let current = params.method.name();
+            let mut chosen = current;
+            egui::ComboBox::from_label("method")
+                .selected_text(current)
+                .show_ui(ui, |ui| {
+                    for name in [
+                        "explicit_euler",
+                        "symplectic_euler",
+                        "verlet",
+                        "implicit_euler",
+                        "pbd",
+                        "xpbd",
+                        "small_steps_xpbd",
+                    ] {
+                        ui.selectable_value(&mut chosen, name, name);
+                    }
+                });
+            let mut method = params.method;
+            if chosen != current
+                && let Some(setting) = crate::bench_sim::stable_setting(chosen)
+            {
+                method = setting;
+            }
+            let mut substeps = method.substeps();
+            let mut iterations = method.iterations();
+            if let Some(v) = self.fields.substeps.show(ui, in_range(1.0, 2000.0)) {
+                substeps = v as u32;
+            }
+            if let Some(v) = self.fields.iterations.show(ui, in_range(1.0, 1000.0)) {
+                iterations = v as u32;
+            }
+            if substeps != method.substeps() || iterations != method.iterations() {
+                method = Method::from_name(method.name(), substeps, iterations).unwrap_or(method);
+            }
+            if method != params.method {
+                params.method = method;
+                self.fields.substeps.text = method.substeps().to_string();
+                self.fields.iterations.text = method.iterations().to_string();
+                if let Err(e) = self.flag.set_simulation_params(params) {
+                    self.notice = Some(e.to_string());
+                }
+            }
+            if let Some(v) = self.fields.columns.show(ui, in_range(2.0, 512.0)) {
+                let columns = v as usize;
+                // Keep the flag's 8:11 cells square.
+                let flag = &mut self.flag.scene.flag;
+                flag.columns = columns;
+                flag.rows =
+                    ((columns as f64 - 1.0) * flag.height / flag.width).round() as usize + 1;
+                self.rebuild();
+            }
+            ui.horizontal(|ui| {
+                if ui
+                    .button(if self.paused { "run" } else { "pause" })
+                    .clicked()
+                {
+                    self.paused = !self.paused;
+                }
+                if ui.button("step").clicked() {
+                    self.paused = true;
+                    self.step_once = true;
+                }
+                if ui.button("reset").clicked() {
+                    if let Err(e) = self.flag.reset() {
+                        self.notice = Some(e.to_string());
+                    }
+                }
+            });
+        });
+        if shading_changed && let Err(e) = self.renderer.update_shading(&self.flag.scene) {
+            self.notice = Some(e.to_string());
+        }
+        ui.separator();
+        if ui.button("screenshot").clicked() {
+            let path = PathBuf::from(format!("sheer-{}.png", self.frames_run));
+            self.request_screenshot(ui.ctx(), path);
+        }
+        if let Some(notice) = &self.notice {
+            ui.colored_label(egui::Color32::from_rgb(255, 200, 90), notice);
+        }
+        ui.separator();
+        self.readout(ui);
+    }
+
+    fn readout(&self, ui: &mut egui::Ui) {
+        let mean = if self.frame_history.is_empty() {
+            0.0
+        } else {
+            self.frame_history.iter().sum::<f32>() / self.frame_history.len() as f32
+        };
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        ui.label(format!(
+            "{:.1} frames/s ({mean:.1} ms)",
+            1e3 / mean.max(1e-3)
+        ));
+        ui.monospace(format!(
+            "simulation {:6.2} ms\nnormals    {:6.2} ms\nshading+GPU{:6.2} ms\nread-back  {:6.2} ms",
+            ms(self.times.simulation),
+            ms(self.times.normals),
+            ms(self.times.shading),
+            ms(self.times.readback)
+        ));
+        ui.small(format!("adapter: {}", self.renderer.adapter()));
+        // Frame-time history, 0 to the largest recent frame time.
+        let (rect, _) =
+            ui.allocate_exact_size(egui::vec2(ui.available_width(), 60.0), egui::Sense::hover());
+        let painter = ui.painter_at(rect);
+        painter.rect_filled(rect, 2.0, egui::Color32::from_gray(30));
+        let top = self.frame_history.iter().cloned().fold(1.0f32, f32::max);
+        let n = self.frame_history.len().max(2) as f32;
+        let points: Vec<egui::Pos2> = self
+            .frame_history
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                egui::pos2(
+                    rect.left() + rect.width() * i as f32 / (n - 1.0),
+                    rect.bottom() - rect.height() * v / top,
+                )
+            })
+            .collect();
+        painter.add(egui::Shape::line(
+            points,
+            egui::Stroke::new(1.5, egui::Color32::from_rgb(120, 200, 255)),
+        ));
+        painter.text(
+            rect.left_top() + egui::vec2(4.0, 2.0),
+            egui::Align2::LEFT_TOP,
+            format!("frame time, max {top:.0} ms"),
+            egui::FontId::proportional(11.0),
+            egui::Color32::from_gray(200),
+        );
+    }
+
+    fn request_screenshot(&mut self, ctx: &egui::Context, path: PathBuf) {
+        let done = self.screenshot_done.clone();
+        ctx.request_screenshot(move |image| {
+            let [w, h] = image.size;
+            let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+            let result = image::RgbaImage::from_raw(w as u32, h as u32, bytes)
+                .ok_or_else(|| "screenshot has the wrong size".to_string())
+                .and_then(|img| {
+                    image::DynamicImage::ImageRgba8(img)
+                        .to_rgb8()
+                        .save(&path)
+                        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+                })
+                .map(|()| path);
+            if let Ok(mut slot) = done.lock() {
+                *slot = Some(result);
+            }
+        });
+        self.screenshot_requested = true;
+    }
+}
+
+impl eframe::App for SheerApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        // A finished screenshot: report it, and in scripted mode leave.
+        let finished = self.screenshot_done.lock().ok().and_then(|mut s| s.take());
+        if let Some(result) = finished {
+            self.screenshot_requested = false;
+            match result {
+                Ok(path) => self.notice = Some(format!("saved {}", path.display())),
+                Err(e) => self.notice = Some(e),
+            }
+            if self.options.frames.is_some() {
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        }
+        self.advance_and_render(&ctx);
+        self.frames_run += 1;
+        if let Some(limit) = self.options.frames
+            && self.frames_run >= limit
+            && !self.screenshot_requested
+        {
+            match self.options.screenshot.clone() {
+                Some(path) if self.frames_run == limit => self.request_screenshot(&ctx, path),
+                Some(_) => {}
+                None => ctx.send_viewport_cmd(egui::ViewportCommand::Close),
+            }
+        }
+        egui::Panel::left("controls")
+            .resizable(false)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
+            });
+        egui::CentralPanel::default().show(ui, |ui| {
+            if let Some(texture) = &self.texture {
+                let available = ui.available_size();
+                let size = texture.size_vec2();
+                let scale = (available.x / size.x).min(available.y / size.y).max(0.1);
+                let response = ui.add(
+                    egui::Image::new(texture)
+                        .fit_to_exact_size(size * scale)
+                        .sense(egui::Sense::drag()),
+                );
+                if response.dragged() {
+                    let delta = response.drag_delta();
+                    self.orbit.0 -= delta.x * 0.01;
+                    self.orbit.1 = (self.orbit.1 + delta.y * 0.01).clamp(-1.4, 1.4);
+                    self.apply_orbit();
+                }
+                if response.hovered() {
+                    let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+                    if scroll != 0.0 {
+                        self.orbit.2 = (self.orbit.2 * (1.0 - scroll * 0.002)).clamp(0.3, 20.0);
+                        self.apply_orbit();
+                    }
+                }
+            }
+        });
+        ctx.request_repaint();
+    }
+}
+
+/// Opens the window; returns when it closes.
+pub fn run(options: WindowOptions) -> Result<(), CliError> {
+    let scene = crate::load_scene(options.scene.as_deref())?;
+    let app = SheerApp::new(scene, options)?;
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1000.0, 620.0])
+            .with_title("sheer — thin cloth"),
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    eframe::run_native("sheer", native, Box::new(|_| Ok(Box::new(app))))
+        .map_err(|e| CliError::new(format!("window: {e}")))
+}
