@@ -18,7 +18,8 @@ struct Frame {
     eye: vec4<f32>,
     // xyz: light position (m); w: flux Φ (W) of the isotropic point light.
     light: vec4<f32>,
-    // rgb: optical thickness τ1 per channel; w: 1 if the thickness texture multiplies τ1, else 0.
+    // rgb: optical thickness τ1 per channel; w: 1 if the thickness texture multiplies τ1, else 0
+    // (informative; the shader uses the override constant `has_thickness_texture`).
     optical_thickness: vec4<f32>,
     // rgb: single-scattering albedo scale (multiplies the albedo texture); w: convention
     // (0 = irradiance normal to the beam, 1 = paper-literal surface irradiance of eq. 6).
@@ -42,42 +43,51 @@ const COSINE_FLOOR: f32 = 1e-6;
 
 // Set per pipeline: true when τ1 differs between channels (then the model runs three times).
 override per_channel_thickness: bool = false;
+// Set per pipeline: true when a thickness texture multiplies τ1.
+override has_thickness_texture: bool = false;
 
-// φ(d) = (1 − e^{−d})/d = Σ (−d)^k/(k+1)! for 0 ≤ d ≤ 1, by Horner with the coefficients (−1)^k/(k+1)!
-// (multiplications only: divisions by constants would stay divisions without fast-math); stopping after
-// d^11/12! leaves an error below 1/13! < 2e-10, far under f32 precision. φ(0) = 1 exactly.
+// φ(d) = (1 − e^{−d})/d = Σ (−d)^k/(k+1)! for 0 ≤ d ≤ 1/2, by Horner with the coefficients
+// (−1)^k/(k+1)! (multiplications only: divisions by constants stay divisions without fast-math); stopping
+// after d^8/9! leaves an error below (1/2)^9/10! < 6e-10, far under f32 precision. φ(0) = 1 exactly.
 fn phi_series(d: f32) -> f32 {
     return 1.0 + d * (-0.5 + d * (0.166666667 + d * (-0.0416666667 + d * (0.00833333333
-        + d * (-0.00138888889 + d * (0.000198412698 + d * (-2.48015873e-05 + d * (2.75573192e-06
-        + d * (-2.75573192e-07 + d * (2.50521084e-08 + d * (-2.08767570e-09)))))))))));
+        + d * (-0.00138888889 + d * (0.000198412698 + d * (-2.48015873e-05 + d * 2.75573192e-06)))))));
 }
 
-// The model for one channel without Λ/(4π)·E: (eq. 4 shape, eq. 5 shape, α). Branch-free (selects), two
-// exponentials shared by all three; every difference of exponentials is taken only where it loses at most
-// log2(1/(1 − e^{−1})) = 0.66 bits, the Taylor series of φ covering the rest:
+// Below this argument the series is used; above it, differences of exponentials lose at most
+// log2(1/(1 − e^{−1/2})) = 1.35 bits.
+const SERIES_LIMIT: f32 = 0.5;
+
+// The model for one channel without Λ/(4π)·E: (eq. 4 shape, eq. 5 shape, α). Branch-free (selects: a
+// software rasteriser runs both sides of a branch anyway), with two exponentials shared by all three.
+// Differences of exponentials are taken only where they lose at most 1.35 bits (argument ≥ 1/2), the
+// Taylor series of φ covers the rest, so nothing cancels catastrophically and μ = μ0 is exact:
 //   α = e^{−τ1/μ}, e0 = e^{−τ1/μ0};
-//   eq. (4): μ0/(μ+μ0)·(1 − e^{−x}), x = τ1/μ + τ1/μ0, with 1 − e^{−x} = 1 − α·e0 (x ≥ 1) or x·φ(x);
-//   eq. (5): with M, m = max, min of μ, μ0, e_M = e^{−τ1/M}, e_m = e^{−τ1/m}, d = (τ1/m)(1 − m/M)
-//     = τ1|μ−μ0|/(μμ0):  d < 1: (τ1/μ)·e_M·φ(d)  (the exact limit (τ1/μ)e^{−τ1/μ} at μ = μ0);
-//                        d ≥ 1: μ0/(M−m)·(e_M − e_m)  (the paper's form, where it is well conditioned).
+//   eq. (4): μ0/(μ+μ0)·(1 − e^{−x}), x = τ1/μ + τ1/μ0; 1 − e^{−x} = 1 − α·e0 (x ≥ 1/2), else x·φ(x);
+//   eq. (5): with M, m = max, min of μ, μ0, e_M = e^{−τ1/M}, e_m = e^{−τ1/m}, d = τ1|1/μ − 1/μ0|,
+//     d < 1/2: (τ1/μ)·e_M·φ(d)  (at μ = μ0 the exact limit (τ1/μ)·e^{−τ1/μ});
+//     d ≥ 1/2: μ0/(M−m)·(e_M − e_m)  (the paper's form, where it is well conditioned).
 fn slab_shapes(tau: f32, mu0: f32, mu: f32) -> vec3<f32> {
     let tau_over_mu = tau / mu;
     let tau_over_mu0 = tau / mu0;
     let alpha = exp(-tau_over_mu);
     let lit_attenuation = exp(-tau_over_mu0);
     let x = tau_over_mu + tau_over_mu0;
-    let one_minus_exp = select(1.0 - alpha * lit_attenuation, x * phi_series(min(x, 1.0)), x < 1.0);
+    let series_x = x * phi_series(min(x, SERIES_LIMIT));
+    let one_minus_exp = select(1.0 - alpha * lit_attenuation, series_x, x < SERIES_LIMIT);
     let reflected = mu0 / (mu + mu0) * one_minus_exp;
     let larger = max(mu, mu0);
     let smaller = min(mu, mu0);
     let eye_larger = mu >= mu0;
     let e_larger = select(lit_attenuation, alpha, eye_larger);
     let e_smaller = select(alpha, lit_attenuation, eye_larger);
-    let d = (tau / smaller) * ((larger - smaller) / larger);
-    let near_diagonal = tau_over_mu * e_larger * phi_series(min(d, 1.0));
+    // d = |τ1/μ − τ1/μ0|: near μ = μ0 its absolute error is ≤ ε·τ1/m, which moves φ(d) ≈ 1 − d/2 by
+    // ≤ ε·τ1/(2m) relative: harmless (no division needed, unlike the f64 reference's (τ1/m)(1 − m/M)).
+    let d = abs(tau_over_mu - tau_over_mu0);
+    let near_diagonal = tau_over_mu * e_larger * phi_series(min(d, SERIES_LIMIT));
     // max(): keeps the unused select operand finite at μ = μ0.
     let off_diagonal = mu0 / max(larger - smaller, 1e-30) * (e_larger - e_smaller);
-    let transmitted = select(off_diagonal, near_diagonal, d < 1.0);
+    let transmitted = select(off_diagonal, near_diagonal, d < SERIES_LIMIT);
     return vec3<f32>(reflected, transmitted, alpha);
 }
 
@@ -119,9 +129,9 @@ fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>) -> SlabVa
     return SlabValues(shape * (irradiance / (4.0 * PI)), transmittance);
 }
 
-// τ1 per channel at uv; the thickness texture is only sampled when present (a uniform branch).
+// τ1 per channel at uv; the thickness texture is only sampled when present (fixed per pipeline).
 fn optical_thickness_at(uv: vec2<f32>) -> vec3<f32> {
-    if frame.optical_thickness.w > 0.5 {
+    if has_thickness_texture {
         return frame.optical_thickness.rgb * textureSample(thickness_texture, linear_sampler, uv).r;
     }
     return frame.optical_thickness.rgb;
@@ -129,7 +139,7 @@ fn optical_thickness_at(uv: vec2<f32>) -> vec3<f32> {
 
 // As `optical_thickness_at`, for the vertex stage (explicit level 0).
 fn optical_thickness_at_vertex(uv: vec2<f32>) -> vec3<f32> {
-    if frame.optical_thickness.w > 0.5 {
+    if has_thickness_texture {
         return frame.optical_thickness.rgb * textureSampleLevel(thickness_texture, linear_sampler, uv, 0.0).r;
     }
     return frame.optical_thickness.rgb;

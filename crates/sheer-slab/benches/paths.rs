@@ -132,37 +132,48 @@ fn main() {
     }
     criterion.final_summary();
 
-    // Interleaved rounds so that drift of the machine affects every path alike.
-    let rounds = 12;
-    let frames_per_round = 10;
-    let mut seconds = [0.0f64; 4];
+    // Interleaved rounds so that drift of the machine affects every path alike; each round's frame
+    // times are divided by that round's baseline time and the median over rounds is reported, which
+    // discounts bursts of load from other processes.
+    let rounds = 40;
+    let frames_per_round = 5;
+    let mut per_round: [Vec<f64>; 4] = Default::default();
     for _ in 0..rounds {
         for (slot, path) in EvaluationPath::ALL.into_iter().enumerate() {
             let start = Instant::now();
             for _ in 0..frames_per_round {
                 frame(&mut renderer, &scene, path);
             }
-            seconds[slot] += start.elapsed().as_secs_f64();
+            per_round[slot].push(start.elapsed().as_secs_f64() / f64::from(frames_per_round));
         }
     }
-    let frames = f64::from(rounds * frames_per_round);
-    let baseline = seconds[3] / frames;
+    let median = |values: &mut Vec<f64>| {
+        values.sort_by(f64::total_cmp);
+        0.5 * (values[(values.len() - 1) / 2] + values[values.len() / 2])
+    };
+    let baseline_times = per_round[3].clone();
     println!(
-        "\n512x512, {} triangles, {} frames per path, interleaved",
-        scene.mesh.indices.len() / 3,
-        frames
+        "\n512x512, {} triangles, {rounds} interleaved rounds of {frames_per_round} frames per path",
+        scene.mesh.indices.len() / 3
     );
-    println!("| path | ms/frame | fps | frame time / baseline | paper fps |");
+    println!(
+        "| path | median ms/frame | fps | median frame time / baseline (per round) | paper fps |"
+    );
     println!("|---|---|---|---|---|");
     let paper = ["300", "480", "190", "-"];
     for (slot, path) in EvaluationPath::ALL.into_iter().enumerate() {
-        let per_frame = seconds[slot] / frames;
+        let mut ratios: Vec<f64> = per_round[slot]
+            .iter()
+            .zip(&baseline_times)
+            .map(|(t, b)| t / b)
+            .collect();
+        let per_frame = median(&mut per_round[slot]);
         println!(
             "| {} | {:.2} | {:.1} | {:.3} | {} |",
             path.name(),
             1e3 * per_frame,
             1.0 / per_frame,
-            per_frame / baseline,
+            median(&mut ratios),
             paper[slot]
         );
     }

@@ -110,6 +110,32 @@ pub fn evaluate_row(line: &str, convention: IrradianceConvention) -> Result<Slab
     })
 }
 
+/// Inputs `(τ1, Λ, μ0, μ)` of the table of exact values in the crate README (printed by
+/// `examples/value_table.rs`, checked against the README and against quadrature by `tests/readme_table.rs`).
+pub const REFERENCE_TABLE_INPUTS: [[f64; 4]; 12] = [
+    [2.0, 1.0, 1.0, 1.0],
+    [2.0, 1.0, 0.5, 0.5],
+    [2.0, 1.0, 0.5, 0.9],
+    [2.0, 1.0, 0.9, 0.5],
+    [0.2, 1.0, 1.0, 1.0],
+    [0.2, 0.5, 0.3, 0.3],
+    [0.001, 1.0, 0.01, 0.01],
+    [10.0, 1.0, 0.05, 0.05],
+    [10.0, 0.8, 1.0, 0.01],
+    [1.0, 0.0, 0.5, 0.5],
+    [0.5, 1.0, 0.999999, 1.0],
+    [1e-6, 1.0, 1.0, 1e-6],
+];
+
+/// One Markdown table row `| tau1 | albedo | mu0 | mu | alpha | l_plus | l_minus |`, outputs with 10
+/// significant digits.
+pub fn markdown_row(row: &SlabRow) -> String {
+    format!(
+        "| {} | {} | {} | {} | {:.9e} | {:.9e} | {:.9e} |",
+        row.optical_thickness, row.albedo, row.mu0, row.mu, row.alpha, row.l_plus, row.l_minus
+    )
+}
+
 /// Reads CSV rows from `input`, writes [`OUTPUT_HEADER`] and one evaluated row per input row to `output`.
 /// Stops at the first bad row with an error naming its 1-based line number.
 pub fn evaluate_csv(

@@ -1,7 +1,7 @@
 //! Thin-slab shading after Frisvad, Christensen & Falster (2005), "Efficient light scattering through thin
 //! semi-transparent objects": the single-scattering model of a locally plane-parallel, optically thin slab
 //! (their eqs. 4–9) on the CPU ([`model`], the `f64` reference) and on wgpu ([`render`]), plus a CSV
-//! evaluator for checking the model from outside ([`csv`]) and independent numerics ([`reference`]).
+//! evaluator for checking the model from outside ([`csv`]) and independent numerics ([`mod@reference`]).
 //!
 //! See `README.md` for the irradiance-convention finding and the cancellation-free form of eq. (5).
 

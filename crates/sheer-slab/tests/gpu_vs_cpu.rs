@@ -91,13 +91,13 @@ impl Sheet {
     }
 }
 
-/// The CPU model at a point of a sheet, grey τ1 and Λ: (L_source, α), straight from `sheer_slab::model`.
+/// The CPU model at a point of a sheet lit by a point light (position, flux Φ in W), grey τ1 and Λ:
+/// (L_source, α), straight from `sheer_slab::model`.
 fn model_at(
     point: DVec3,
     normal: DVec3,
     eye: DVec3,
-    light: DVec3,
-    flux: f64,
+    (light, flux): (DVec3, f64),
     tau: f64,
     albedo: f64,
     convention: IrradianceConvention,
@@ -276,7 +276,12 @@ fn per_fragment_matches_cpu_model_pixel_by_pixel() {
                         |x, y| match hit(x, y) {
                             Some(point) => {
                                 let (source, alpha) = model_at(
-                                    point, normal, eye, light, flux, tau_f32, albedo_f32,
+                                    point,
+                                    normal,
+                                    eye,
+                                    (light, flux),
+                                    tau_f32,
+                                    albedo_f32,
                                     convention,
                                 );
                                 (background.map(|b| f64::from(b) * alpha + source), alpha)
@@ -364,8 +369,7 @@ fn background_image_is_composited_pixel_exactly() {
                         point,
                         DVec3::Z,
                         eye,
-                        light,
-                        flux,
+                        (light, flux),
                         tau,
                         albedo,
                         IrradianceConvention::NormalToBeam,
@@ -377,8 +381,7 @@ fn background_image_is_composited_pixel_exactly() {
                             p,
                             DVec3::Z,
                             eye,
-                            light,
-                            flux,
+                            (light, flux),
                             tau,
                             albedo,
                             IrradianceConvention::NormalToBeam,
@@ -464,8 +467,7 @@ fn overlapping_sheets_composite_back_to_front() {
                 point,
                 normal,
                 eye,
-                light,
-                flux,
+                (light, flux),
                 tau,
                 albedo,
                 IrradianceConvention::NormalToBeam,
@@ -703,8 +705,7 @@ fn per_channel_optical_thickness_blends_per_channel() {
                         point,
                         sheet.normal,
                         eye,
-                        light,
-                        flux,
+                        (light, flux),
                         f64::from(taus[c]),
                         f64::from(albedos[c]),
                         IrradianceConvention::NormalToBeam,

@@ -257,6 +257,27 @@ mod tests {
     }
 
     #[test]
+    fn cpu_path_is_independent_of_thread_count() {
+        let mut mesh = SlabMesh::flat_sheet(Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, 40, 30).unwrap();
+        for (i, position) in mesh.positions.iter_mut().enumerate() {
+            position[2] = 0.05 * (i as f32 * 0.37).sin();
+        }
+        let params = ShadingParams::uniform(1.5, 0.8, Vec3::new(0.3, 0.2, 1.0), 20.0).unwrap();
+        let eye = Vec3::new(0.5, -0.4, -1.5);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| per_vertex_slab_values(&mesh, eye, &params))
+        };
+        let single = run(1);
+        assert_eq!(single, run(4));
+        assert_eq!(single, run(7));
+        assert!(single.iter().any(|v| v.radiance_per_albedo[0] > 0.0));
+    }
+
+    #[test]
     fn sort_puts_far_triangles_first() {
         let near = SlabMesh::flat_sheet(Vec3::new(0.0, 0.0, 1.0), Vec3::X, Vec3::Y, Vec3::Z, 1, 1)
             .unwrap();

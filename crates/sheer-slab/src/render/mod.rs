@@ -32,6 +32,7 @@ const SHADER_BODY: &str = include_str!("../../../../shaders/thin_slab.wgsl");
 const LIT_SIDE: &str = include_str!("../../../../shaders/lit_side.wgsl");
 const OUTPUT_SINGLE: &str = include_str!("../../../../shaders/slab_output_single.wgsl");
 const OUTPUT_DUAL: &str = include_str!("../../../../shaders/slab_output_dual.wgsl");
+const MODEL_CHECK: &str = include_str!("../../../../shaders/slab_model_check.wgsl");
 
 /// Where the model is evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -188,7 +189,7 @@ pub struct HeadlessRenderer {
     bind_group_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     modules: HashMap<bool, wgpu::ShaderModule>,
-    pipelines: HashMap<(EvaluationPath, bool), wgpu::RenderPipeline>,
+    pipelines: HashMap<(EvaluationPath, bool, bool), wgpu::RenderPipeline>,
     background_pipeline: Option<wgpu::RenderPipeline>,
     albedo: GpuTexture,
     thickness: GpuTexture,
@@ -459,7 +460,8 @@ impl HeadlessRenderer {
         self.queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         self.upload_mesh(mesh, camera, shading, path);
-        self.pipeline(path, dual)?;
+        let thickness = shading.thickness_texture.is_some();
+        self.pipeline(path, dual, thickness)?;
 
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("slab bind group"),
@@ -514,7 +516,7 @@ impl HeadlessRenderer {
                 pass.set_pipeline(background_pipeline);
                 pass.draw(0..3, 0..1);
             }
-            let pipeline = &self.pipelines[&(path, dual)];
+            let pipeline = &self.pipelines[&(path, dual, thickness)];
             pass.set_pipeline(pipeline);
             if let Some((buffer, _)) = &self.vertex_buffer {
                 pass.set_vertex_buffer(0, buffer.slice(..));
@@ -565,30 +567,9 @@ impl HeadlessRenderer {
             },
         );
         self.queue.submit([encoder.finish()]);
-        let slice = self.readback.slice(..);
-        let status = Arc::new(Mutex::new(None));
-        let status_sink = Arc::clone(&status);
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            if let Ok(mut slot) = status_sink.lock() {
-                *slot = Some(result);
-            }
-        });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|error| RenderError::Gpu(error.to_string()))?;
-        let mapped = status.lock().ok().and_then(|mut slot| slot.take());
-        match mapped {
-            Some(Ok(())) => {}
-            Some(Err(error)) => {
-                return Err(RenderError::Gpu(format!("mapping the readback: {error}")));
-            }
-            None => return Err(RenderError::Gpu("readback never mapped".into())),
-        }
+        let data = self.map_and_read(&self.readback)?;
         let mut pixels = Vec::with_capacity((self.width * self.height) as usize);
         {
-            let data = slice
-                .get_mapped_range()
-                .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?;
             for row in 0..self.height as usize {
                 let start = row * self.padded_row_bytes as usize;
                 match self.target_format {
@@ -617,13 +598,127 @@ impl HeadlessRenderer {
                 }
             }
         }
-        self.readback.unmap();
-        self.take_uncaptured()?;
         Ok(LinearImage {
             width: self.width,
             height: self.height,
             pixels,
         })
+    }
+
+    /// Evaluates the shader's model function (`slab_shapes` in `shaders/thin_slab.wgsl`) on the GPU for
+    /// samples `(τ1, μ0, μ)` and returns `(eq. 4, eq. 5, α)` per sample, the radiances per unit
+    /// irradiance and without the factor Λ/(4π): for checking the WGSL model against [`crate::model`].
+    /// The renderer only calls it with cosines ≥ [`COSINE_FLOOR`].
+    pub fn evaluate_shader_model(
+        &mut self,
+        samples: &[[f32; 3]],
+    ) -> Result<Vec<[f32; 3]>, RenderError> {
+        if samples.is_empty() {
+            return Ok(Vec::new());
+        }
+        let source = format!("{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{MODEL_CHECK}");
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = self
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("slab model check"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("slab model check"),
+                layout: None,
+                module: &module,
+                entry_point: Some("cs_model_check"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(format!("model check shader: {error}")));
+        }
+        let inputs: Vec<[f32; 4]> = samples.iter().map(|&[t, m0, m]| [t, m0, m, 0.0]).collect();
+        let size = std::mem::size_of_val(inputs.as_slice()) as u64;
+        let input_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("model inputs"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.queue
+            .write_buffer(&input_buffer, 0, bytemuck::cast_slice(&inputs));
+        let output_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("model outputs"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("model readback"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("model check"),
+            layout: &pipeline.get_bind_group_layout(1),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: input_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: output_buffer.as_entire_binding(),
+                },
+            ],
+        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("model check"),
+            });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("model check"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(1, &bind_group, &[]);
+            pass.dispatch_workgroups((samples.len() as u32).div_ceil(64), 1, 1);
+        }
+        encoder.copy_buffer_to_buffer(&output_buffer, 0, &readback, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let bytes = self.map_and_read(&readback)?;
+        let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        Ok(values.iter().map(|v| [v[0], v[1], v[2]]).collect())
+    }
+
+    fn map_and_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+        let slice = buffer.slice(..);
+        let status = Arc::new(Mutex::new(None));
+        let status_sink = Arc::clone(&status);
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            if let Ok(mut slot) = status_sink.lock() {
+                *slot = Some(result);
+            }
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|error| RenderError::Gpu(error.to_string()))?;
+        let mapped = status.lock().ok().and_then(|mut slot| slot.take());
+        match mapped {
+            Some(Ok(())) => {}
+            Some(Err(error)) => return Err(RenderError::Gpu(format!("mapping a buffer: {error}"))),
+            None => return Err(RenderError::Gpu("buffer never mapped".into())),
+        }
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?
+            .to_vec();
+        buffer.unmap();
+        self.take_uncaptured()?;
+        Ok(bytes)
     }
 
     fn take_uncaptured(&self) -> Result<(), RenderError> {
@@ -921,8 +1016,13 @@ impl HeadlessRenderer {
         Ok(pipeline)
     }
 
-    fn pipeline(&mut self, path: EvaluationPath, dual: bool) -> Result<(), RenderError> {
-        if self.pipelines.contains_key(&(path, dual)) {
+    fn pipeline(
+        &mut self,
+        path: EvaluationPath,
+        dual: bool,
+        thickness: bool,
+    ) -> Result<(), RenderError> {
+        if self.pipelines.contains_key(&(path, dual, thickness)) {
             return Ok(());
         }
         let module = self.module(dual)?;
@@ -961,8 +1061,13 @@ impl HeadlessRenderer {
                 operation: wgpu::BlendOperation::Add,
             },
         };
-        // Specialises the shader: per-channel τ1 evaluates the model three times, grey τ1 once.
-        let constants = [("per_channel_thickness", if dual { 1.0 } else { 0.0 })];
+        // Specialises the shader at pipeline creation: per-channel τ1 evaluates the model three times,
+        // grey τ1 once; the thickness texture is sampled only when there is one (a software rasteriser
+        // would otherwise pay for the masked-off sample).
+        let constants = [
+            ("per_channel_thickness", if dual { 1.0 } else { 0.0 }),
+            ("has_thickness_texture", if thickness { 1.0 } else { 0.0 }),
+        ];
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = self
             .device
@@ -1007,7 +1112,7 @@ impl HeadlessRenderer {
                 path.name()
             )));
         }
-        self.pipelines.insert((path, dual), pipeline);
+        self.pipelines.insert((path, dual, thickness), pipeline);
         Ok(())
     }
 }

@@ -72,7 +72,7 @@ impl SlabMesh {
                 uvs: self.uvs.len(),
             });
         }
-        if self.indices.is_empty() || self.indices.len() % 3 != 0 {
+        if self.indices.is_empty() || !self.indices.len().is_multiple_of(3) {
             return Err(MeshError::IndexCount(self.indices.len()));
         }
         if let Some((position, &index)) = self
