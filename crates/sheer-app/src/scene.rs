@@ -177,6 +177,8 @@ pub struct RenderSection {
     pub height: u32,
     /// Frames per simulated second (the simulation steps 1/fps per frame).
     pub fps: f32,
+    /// Simulated seconds before the window shows its first frame (the flag starts at rest, flat).
+    pub warmup: f32,
 }
 
 impl Default for RenderSection {
@@ -186,6 +188,7 @@ impl Default for RenderSection {
             width: 512,
             height: 512,
             fps: 60.0,
+            warmup: 1.5,
         }
     }
 }
@@ -405,6 +408,12 @@ impl Scene {
             "render.fps",
             r.fps,
             "must be finite and > 0",
+        )?;
+        check(
+            r.warmup.is_finite() && (0.0..=600.0).contains(&r.warmup),
+            "render.warmup",
+            r.warmup,
+            "must lie in [0, 600] s",
         )?;
         if let Some(sheet) = &self.static_sheet {
             finite3("static_sheet.centre", sheet.centre)?;

@@ -124,6 +124,8 @@ fn orbit_of(scene: &Scene) -> (f32, f32, f32) {
 impl SheerApp {
     pub fn new(scene: Scene, options: WindowOptions) -> Result<SheerApp, CliError> {
         let renderer = FrameRenderer::new(&scene)?;
+        let mut flag = FlagScene::new(scene.clone())?;
+        crate::render_cmd::advance_to(&mut flag, scene.render.warmup)?;
         let orbit = orbit_of(&scene);
         let wind = scene.simulation.wind;
         let speed = wind.velocity.length();
@@ -150,7 +152,7 @@ impl SheerApp {
             columns: NumberField::new("grid columns", scene.flag.columns as f64),
         };
         Ok(SheerApp {
-            flag: FlagScene::new(scene)?,
+            flag,
             renderer,
             texture: None,
             fields,
