@@ -19,25 +19,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Interpolation error at points halfway between nodes on every axis (the worst case of
     // multilinear interpolation), over a coarse sweep.
     let spec = table.spec();
-    let mut worst_total: f64 = 0.0;
-    let mut worst_multiple: f64 = 0.0;
-    let mut worst_at = (0.0, 0.0, 0.0, 0.0);
-    for t in (0..spec.tau_count - 1).step_by(4) {
-        let log_tau = spec.log10_tau_min
-            + (t as f64 + 0.5) / (spec.tau_count - 1) as f64
-                * (spec.log10_tau_max - spec.log10_tau_min);
-        let tau1 = 10f64.powf(log_tau);
+    // Two regimes: all cosines, and cosines >= 0.05 (angles below 87 degrees from the normal).
+    // Indexed [side][regime], side 0 = reflected, 1 = transmitted.
+    let mut worst_total = [[0.0f64; 2]; 2];
+    let mut worst_multiple = [[0.0f64; 2]; 2];
+    let mut worst_at = [[(0.0, 0.0, 0.0, 0.0); 2]; 2];
+    for t in (0..spec.tau_count - 1).step_by(3) {
+        let tau1 = spec.tau_at(t as f64 + 0.5);
         for a in (0..spec.albedo_count - 1).step_by(2) {
-            let s = (a as f64 + 0.5) / (spec.albedo_count - 1) as f64;
-            let albedo = 1.0 - s * s;
+            let albedo = spec.albedo_at(a as f64 + 0.5, tau1);
             let solver = SlabSolver::new(tau1, albedo)?;
-            for k in (0..spec.cosine_count - 1).step_by(3) {
-                let x0 = (k as f64 + 0.5) / (spec.cosine_count - 1) as f64;
-                let mu0 = x0 * x0;
+            for k in (0..spec.cosine_count - 1).step_by(2) {
+                let mu0 = spec.cosine_at(k as f64 + 0.5);
                 let solution = solver.solve(mu0)?;
-                for j in (0..spec.cosine_count - 1).step_by(3) {
-                    let x = (j as f64 + 0.5) / (spec.cosine_count - 1) as f64;
-                    let mu = x * x;
+                for j in (0..spec.cosine_count - 1).step_by(2) {
+                    let mu = spec.cosine_at(j as f64 + 0.5);
                     for reflected in [true, false] {
                         let (exact, exact_multiple, approx, approx_multiple) = if reflected {
                             (
@@ -55,20 +51,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             )
                         };
                         let total_error = ((approx - exact) / exact).abs();
-                        if total_error > worst_total {
-                            worst_total = total_error;
-                            worst_at = (tau1, albedo, mu0, mu);
+                        let multiple_error =
+                            ((approx_multiple - exact_multiple) / exact_multiple).abs();
+                        let regimes: &[usize] = if mu0.min(mu) >= 0.05 { &[0, 1] } else { &[0] };
+                        let side = usize::from(!reflected);
+                        for &r in regimes {
+                            if total_error > worst_total[side][r] {
+                                worst_total[side][r] = total_error;
+                                worst_at[side][r] = (tau1, albedo, mu0, mu);
+                            }
+                            worst_multiple[side][r] = worst_multiple[side][r].max(multiple_error);
                         }
-                        worst_multiple = worst_multiple
-                            .max(((approx_multiple - exact_multiple) / exact_multiple).abs());
                     }
                 }
             }
         }
     }
-    println!(
-        "mid-cell interpolation error: all-orders radiance max {worst_total:.2e} (at tau1, albedo, \
-         mu0, mu = {worst_at:?}), multiple-scattering part max {worst_multiple:.2e}"
-    );
+    for (side, side_name) in ["reflected", "transmitted"].iter().enumerate() {
+        for (r, name) in ["all cosines", "mu, mu0 >= 0.05"].iter().enumerate() {
+            println!(
+                "mid-cell interpolation error, {side_name} ({name}): all-orders radiance max {:.2e} \
+                 at (tau1, albedo, mu0, mu) = {:?}; multiple-scattering part max {:.2e}",
+                worst_total[side][r], worst_at[side][r], worst_multiple[side][r]
+            );
+        }
+    }
     Ok(())
 }

@@ -77,8 +77,10 @@ pub fn exponential_integral(order: u32, x: f64) -> f64 {
             let term = if i as u32 != order_minus_one {
                 -factor / (fi - f64::from(order_minus_one))
             } else {
-                let digamma: f64 =
-                    -EULER_GAMMA + (1..=order_minus_one).map(|k| 1.0 / f64::from(k)).sum::<f64>();
+                let digamma: f64 = -EULER_GAMMA
+                    + (1..=order_minus_one)
+                        .map(|k| 1.0 / f64::from(k))
+                        .sum::<f64>();
                 factor * (-x.ln() + digamma)
             };
             sum += term;

@@ -93,6 +93,8 @@ impl HFunction {
     pub fn semi_infinite_reflected_radiance(&self, mu0: f64, mu: f64) -> Result<f64> {
         validate::incident_cosine(mu0)?;
         validate::emergent_cosine(mu)?;
-        Ok(self.albedo * ISOTROPIC_PHASE * mu0 / (mu + mu0) * self.evaluate(mu) * self.evaluate(mu0))
+        Ok(self.albedo * ISOTROPIC_PHASE * mu0 / (mu + mu0)
+            * self.evaluate(mu)
+            * self.evaluate(mu0))
     }
 }

@@ -21,7 +21,11 @@ impl LuFactorisation {
             let (pivot_row, pivot_value) = (column..size)
                 .map(|row| (row, matrix[row * size + column].abs()))
                 .fold((column, -1.0), |best, candidate| {
-                    if candidate.1 > best.1 { candidate } else { best }
+                    if candidate.1 > best.1 {
+                        candidate
+                    } else {
+                        best
+                    }
                 });
             if pivot_value == 0.0 || !pivot_value.is_finite() {
                 return None;
@@ -59,17 +63,23 @@ impl LuFactorisation {
             rhs.swap(column, pivot);
         }
         for row in 0..n {
-            let mut sum = rhs[row];
-            for k in 0..row {
-                sum -= self.factors[row * n + k] * rhs[k];
-            }
+            let factors = &self.factors[row * n..row * n + row];
+            let sum = rhs[row]
+                - factors
+                    .iter()
+                    .zip(&rhs[..row])
+                    .map(|(l, x)| l * x)
+                    .sum::<f64>();
             rhs[row] = sum;
         }
         for row in (0..n).rev() {
-            let mut sum = rhs[row];
-            for k in row + 1..n {
-                sum -= self.factors[row * n + k] * rhs[k];
-            }
+            let factors = &self.factors[row * n + row + 1..(row + 1) * n];
+            let sum = rhs[row]
+                - factors
+                    .iter()
+                    .zip(&rhs[row + 1..])
+                    .map(|(u, x)| u * x)
+                    .sum::<f64>();
             rhs[row] = sum / self.factors[row * n + row];
         }
     }

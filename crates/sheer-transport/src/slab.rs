@@ -70,13 +70,17 @@ impl Discretisation {
 
     fn validate(&self) -> Result<()> {
         if !(self.first_cell > 0.0 && self.first_cell.is_finite()) {
-            return Err(TransportError::Discretisation("first_cell must be finite and > 0"));
+            return Err(TransportError::Discretisation(
+                "first_cell must be finite and > 0",
+            ));
         }
         if !(self.growth >= 1.0 && self.growth <= 2.0) {
             return Err(TransportError::Discretisation("growth must lie in [1, 2]"));
         }
         if !(self.max_cell >= self.first_cell && self.max_cell.is_finite()) {
-            return Err(TransportError::Discretisation("max_cell must be finite and >= first_cell"));
+            return Err(TransportError::Discretisation(
+                "max_cell must be finite and >= first_cell",
+            ));
         }
         if self.forcing_points_per_unit_log < 2 {
             return Err(TransportError::Discretisation(
@@ -259,7 +263,13 @@ fn e1_regular_part(x: f64) -> f64 {
 
 /// `∫_0^1 s^m ln(c + s) ds` for `m = 0, 1, 2` and `c ≥ 0` (elementary antiderivatives).
 fn log_moments(c: f64) -> [f64; 3] {
-    let c_log_c = |power: i32| if c == 0.0 { 0.0 } else { c.powi(power) * c.ln() };
+    let c_log_c = |power: i32| {
+        if c == 0.0 {
+            0.0
+        } else {
+            c.powi(power) * c.ln()
+        }
+    };
     let log_one_plus_c = c.ln_1p();
     [
         (1.0 + c) * log_one_plus_c - c_log_c(1) - 1.0,
@@ -313,7 +323,11 @@ impl KernelRules {
                 h * (-EULER_GAMMA * inverse - (ln_h * inverse + logs[m]) + regular[m])
             })
         } else {
-            let (nodes, weights) = if ratio <= 20.0 { &self.middle } else { &self.far };
+            let (nodes, weights) = if ratio <= 20.0 {
+                &self.middle
+            } else {
+                &self.far
+            };
             let mut moments = [0.0; 3];
             for (&s, &w) in nodes.iter().zip(weights) {
                 let value = w * e1(a + h * s);
@@ -431,7 +445,8 @@ impl SlabSolution {
             return Err(TransportError::OpticalThickness(tau));
         }
         let elements = (self.mesh.len() - 1) / 2;
-        let element = (self.mesh.partition_point(|&t| t <= tau).max(1) - 1).min(2 * elements - 1) / 2;
+        let element =
+            (self.mesh.partition_point(|&t| t <= tau).max(1) - 1).min(2 * elements - 1) / 2;
         let first = 2 * element;
         let sigma = (tau - self.mesh[first]) / (self.mesh[first + 2] - self.mesh[first]);
         let multiple: f64 = QUADRATIC_BASIS
@@ -584,8 +599,7 @@ impl SlabSolution {
             if attenuation == 0.0 {
                 break;
             }
-            let weights =
-                exponential_quadratic_weights((self.mesh[end] - self.mesh[end - 2]) / mu);
+            let weights = exponential_quadratic_weights((self.mesh[end] - self.mesh[end - 2]) / mu);
             sum += attenuation
                 * (weights[0] * self.multiple[end]
                     + weights[1] * self.multiple[end - 1]

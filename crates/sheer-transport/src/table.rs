@@ -4,11 +4,13 @@
 //! added back in closed form (eqs. (4)–(5)), so the table only carries what the paper's model leaves out.
 //!
 //! # Parametrisation (why these axes)
-//! * `log10 τ1`, uniform on `[−2, 1]`: the multiple part grows like a power of τ1 for thin slabs and
-//!   saturates for thick ones, both smooth in `log τ1`.
-//! * `s = √(1−Λ)`, uniform on `[0, 1]`: thick-slab quantities depend smoothly on `√(1−Λ)` (the
-//!   H-function and diffusion exponent do), and nodes crowd towards Λ = 1 where brightness changes
-//!   fastest; the whole range Λ ∈ [0, 1] is covered.
+//! * `c = ln τ1 + τ1`, uniform on `[c(0.01), c(10)]`: the multiple part follows power laws in τ1 for
+//!   thin slabs (linear in `ln τ1` after the logarithm below) and decays exponentially in τ1 through
+//!   thick absorbing slabs (linear in `τ1`); `c` is log-like below τ1 = 1 and linear above.
+//! * Albedo through `s = √(1−Λ)` (thick-slab transmission depends on Λ via the diffusion exponent
+//!   `≈ √(3(1−Λ)) τ1`), warped per τ1 node: `s = (e^{βw} − 1)/(e^β − 1)` with `w` uniform on [0, 1] and
+//!   `β = 1.1 ln(1 + τ1)`, uniform in `s` for thin slabs, crowding towards Λ = 1 for thick ones. The
+//!   whole range Λ ∈ [0, 1] is covered.
 //! * `√μ0`, `√μ` on the same uniform node set in `[0, 1]`: nodes crowd towards grazing angles, where the
 //!   radiance has `μ ln μ` terms.
 //! * Stored value `ln(L_m / (Λ² μ0))`: dividing by Λ² removes the leading Λ dependence (two scatterings),
@@ -17,11 +19,11 @@
 //!   the logarithm, i.e. geometric in the radiance.
 //! * Edge values: `Λ = 0` is the limit `L_m/Λ²` evaluated at Λ = 1e-8 (relative error O(1e-8 × 100));
 //!   `μ0 = 0` is filled by reciprocity `f(μ, 0) = f(0, μ)`; at the corner `μ = μ0 = 0`, where the
-//!   reflected value diverges like `ln ln(1/μ0)` while `L_m = Λ² μ0 f → 0`, the neighbour `μ0 = μ_1` is
+//!   reflected value diverges like `ln(1/μ0)` while `L_m = Λ² μ0 f → 0`, the neighbour `μ0 = μ_1` is
 //!   stored.
 //!
 //! # File format (`assets/all_orders_table.bin`, little-endian)
-//! `b"SHEERAOT"`, `u32` version (1), `u32` counts `n_tau, n_albedo, n_cosine`, `f64` `log10 τ1` range
+//! `b"SHEERAOT"`, `u32` version (1), `u32` counts `n_tau, n_albedo, n_cosine`, `f64` τ1 range
 //! (min, max), then `f32` values `[side][tau][albedo][mu0][mu]` with side 0 = reflected, 1 = transmitted.
 
 use std::path::Path;
@@ -40,12 +42,12 @@ const ALBEDO_FLOOR: f64 = 1.0e-8;
 /// Grid sizes of a table. [`TableSpec::default`] is the one shipped in `assets/`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableSpec {
-    /// Nodes along `log10 τ1`.
+    /// Nodes along `c = ln τ1 + τ1`.
     pub tau_count: usize,
-    /// `log10 τ1` of the first node.
-    pub log10_tau_min: f64,
-    /// `log10 τ1` of the last node.
-    pub log10_tau_max: f64,
+    /// τ1 of the first node.
+    pub tau_min: f64,
+    /// τ1 of the last node.
+    pub tau_max: f64,
     /// Nodes along `√(1−Λ)` on [0, 1].
     pub albedo_count: usize,
     /// Nodes along `√μ0` and `√μ` on [0, 1].
@@ -56,10 +58,10 @@ impl Default for TableSpec {
     fn default() -> Self {
         Self {
             tau_count: 49,
-            log10_tau_min: -2.0,
-            log10_tau_max: 1.0,
-            albedo_count: 11,
-            cosine_count: 17,
+            tau_min: 0.01,
+            tau_max: 10.0,
+            albedo_count: 21,
+            cosine_count: 15,
         }
     }
 }
@@ -71,29 +73,42 @@ impl TableSpec {
                 "need at least 2 tau, 2 albedo and 3 cosine nodes".into(),
             ));
         }
-        if !(self.log10_tau_min.is_finite()
-            && self.log10_tau_max.is_finite()
-            && self.log10_tau_min < self.log10_tau_max)
-        {
-            return Err(TransportError::TableFormat("invalid log10 tau range".into()));
+        if !(self.tau_min > 0.0 && self.tau_max.is_finite() && self.tau_min < self.tau_max) {
+            return Err(TransportError::TableFormat("invalid tau range".into()));
         }
         Ok(())
     }
 
-    fn tau_node(&self, index: usize) -> f64 {
-        let t = index as f64 / (self.tau_count - 1) as f64;
-        10f64.powf(self.log10_tau_min + t * (self.log10_tau_max - self.log10_tau_min))
+    /// τ1 at fractional node position `position` ∈ [0, tau_count − 1] (nodes are uniform in
+    /// `c = ln τ1 + τ1`).
+    pub fn tau_at(&self, position: f64) -> f64 {
+        let (c0, c1) = (tau_coordinate(self.tau_min), tau_coordinate(self.tau_max));
+        tau_from_coordinate(c0 + position / (self.tau_count - 1) as f64 * (c1 - c0))
     }
 
-    fn albedo_node(&self, index: usize, tau1: f64) -> f64 {
-        let w = index as f64 / (self.albedo_count - 1) as f64;
-        let s = albedo_warp(w, tau1);
+    /// Λ at fractional node position `position` ∈ [0, albedo_count − 1] of the albedo axis warped for
+    /// optical thickness `tau1`.
+    pub fn albedo_at(&self, position: f64, tau1: f64) -> f64 {
+        let s = albedo_warp(position / (self.albedo_count - 1) as f64, tau1);
         1.0 - s * s
     }
 
-    fn cosine_node(&self, index: usize) -> f64 {
-        let x = index as f64 / (self.cosine_count - 1) as f64;
+    /// μ (or μ0) at fractional node position `position` ∈ [0, cosine_count − 1] (uniform in `√μ`).
+    pub fn cosine_at(&self, position: f64) -> f64 {
+        let x = position / (self.cosine_count - 1) as f64;
         x * x
+    }
+
+    fn tau_node(&self, index: usize) -> f64 {
+        self.tau_at(index as f64)
+    }
+
+    fn albedo_node(&self, index: usize, tau1: f64) -> f64 {
+        self.albedo_at(index as f64, tau1)
+    }
+
+    fn cosine_node(&self, index: usize) -> f64 {
+        self.cosine_at(index as f64)
     }
 
     fn block(&self) -> usize {
@@ -174,6 +189,25 @@ fn read_f64(bytes: &[u8], offset: usize) -> Result<f64> {
 
 const HEADER_BYTES: usize = 8 + 4 * 4 + 2 * 8;
 
+/// Optical-thickness axis coordinate `c = ln τ1 + τ1`.
+fn tau_coordinate(tau1: f64) -> f64 {
+    tau1.ln() + tau1
+}
+
+/// Inverse of [`tau_coordinate`] by Newton's method on the convex, increasing `ln τ + τ − c`, started
+/// from a point where it is non-negative (so iterates decrease monotonically onto the root).
+fn tau_from_coordinate(coordinate: f64) -> f64 {
+    let mut tau = coordinate.exp().min(coordinate.max(1.0));
+    for _ in 0..100 {
+        let step = (tau.ln() + tau - coordinate) / (1.0 / tau + 1.0);
+        tau -= step;
+        if step.abs() <= 1e-15 * tau {
+            break;
+        }
+    }
+    tau
+}
+
 /// Strength of the τ1-dependent albedo warp: `β = 1.1 ln(1 + τ1)`, chosen so that at τ1 = 10 the first
 /// Λ cell spans `Δs ≈ 0.02`, which keeps the diffusion exponent step `√3 Δs τ1` below ~0.4.
 fn albedo_warp_strength(tau1: f64) -> f64 {
@@ -243,8 +277,8 @@ impl AllOrdersTable {
         ] {
             bytes.extend_from_slice(&(count as u32).to_le_bytes());
         }
-        bytes.extend_from_slice(&self.spec.log10_tau_min.to_le_bytes());
-        bytes.extend_from_slice(&self.spec.log10_tau_max.to_le_bytes());
+        bytes.extend_from_slice(&self.spec.tau_min.to_le_bytes());
+        bytes.extend_from_slice(&self.spec.tau_max.to_le_bytes());
         for value in &self.values {
             bytes.extend_from_slice(&value.to_le_bytes());
         }
@@ -266,8 +300,8 @@ impl AllOrdersTable {
             tau_count: read_u32(bytes, 12)? as usize,
             albedo_count: read_u32(bytes, 16)? as usize,
             cosine_count: read_u32(bytes, 20)? as usize,
-            log10_tau_min: read_f64(bytes, 24)?,
-            log10_tau_max: read_f64(bytes, 32)?,
+            tau_min: read_f64(bytes, 24)?,
+            tau_max: read_f64(bytes, 32)?,
         };
         spec.validate()?;
         let expected = HEADER_BYTES + 4 * 2 * spec.values_per_side();
@@ -304,20 +338,17 @@ impl AllOrdersTable {
         validate::incident_cosine(mu0)?;
         validate::emergent_cosine(mu)?;
         let spec = &self.spec;
-        let log_tau = tau1.log10();
-        // A small tolerance admits the end nodes despite rounding in log10.
-        let slack = 1e-12;
-        if log_tau < spec.log10_tau_min - slack || log_tau > spec.log10_tau_max + slack {
+        // A relative slack of 1e-12 admits the end values despite rounding.
+        if tau1 < spec.tau_min * (1.0 - 1e-12) || tau1 > spec.tau_max * (1.0 + 1e-12) {
             return Err(TransportError::OutsideTable {
                 name: "tau1",
                 value: tau1,
-                min: 10f64.powf(spec.log10_tau_min),
-                max: 10f64.powf(spec.log10_tau_max),
+                min: spec.tau_min,
+                max: spec.tau_max,
             });
         }
-        let tau_unit = ((log_tau - spec.log10_tau_min)
-            / (spec.log10_tau_max - spec.log10_tau_min))
-            .clamp(0.0, 1.0);
+        let (c0, c1) = (tau_coordinate(spec.tau_min), tau_coordinate(spec.tau_max));
+        let tau_unit = ((tau_coordinate(tau1) - c0) / (c1 - c0)).clamp(0.0, 1.0);
         let (t0, wt) = axis_position(tau_unit, spec.tau_count);
         let (k0, wk) = axis_position(mu0.sqrt(), spec.cosine_count);
         let (j0, wj) = axis_position(mu.sqrt(), spec.cosine_count);

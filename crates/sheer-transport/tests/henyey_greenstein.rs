@@ -62,7 +62,15 @@ fn phase_function_is_normalised_with_mean_cosine_g() {
 
 /// Brute force: explicit unit vectors for beam and viewer, HG phase from their dot product, and the
 /// depth integral of the attenuated singly scattered beam by 200-point Gauss.
-fn brute_force(tau1: f64, albedo: f64, mu0: f64, mu: f64, g: f64, azimuth: f64, reflected: bool) -> f64 {
+fn brute_force(
+    tau1: f64,
+    albedo: f64,
+    mu0: f64,
+    mu: f64,
+    g: f64,
+    azimuth: f64,
+    reflected: bool,
+) -> f64 {
     let sin0 = (1.0 - mu0 * mu0).sqrt();
     let sin = (1.0 - mu * mu).sqrt();
     let beam = [sin0, 0.0, -mu0];
@@ -97,12 +105,18 @@ fn closed_form_matches_brute_force_quadrature() {
                         single_scattered_reflected_radiance_hg(tau1, 0.9, mu0, mu, g, azimuth)
                             .unwrap();
                     let brute = brute_force(tau1, 0.9, mu0, mu, g, azimuth, true);
-                    assert!(((ours - brute) / brute).abs() < 1e-12, "refl {ours} vs {brute}");
+                    assert!(
+                        ((ours - brute) / brute).abs() < 1e-12,
+                        "refl {ours} vs {brute}"
+                    );
                     let ours =
                         single_scattered_transmitted_radiance_hg(tau1, 0.9, mu0, mu, g, azimuth)
                             .unwrap();
                     let brute = brute_force(tau1, 0.9, mu0, mu, g, azimuth, false);
-                    assert!(((ours - brute) / brute).abs() < 1e-12, "trans {ours} vs {brute}");
+                    assert!(
+                        ((ours - brute) / brute).abs() < 1e-12,
+                        "trans {ours} vs {brute}"
+                    );
                 }
             }
         }

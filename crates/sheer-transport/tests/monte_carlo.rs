@@ -8,7 +8,13 @@ use sheer_transport::{
 };
 
 /// Single-scattering-only flux `2π ∫ L₁ μ dμ` over a band (eqs. (4)–(5)), by 32-point Gauss.
-fn single_scattering_band_flux(tau1: f64, albedo: f64, mu0: f64, band: (f64, f64), reflected: bool) -> f64 {
+fn single_scattering_band_flux(
+    tau1: f64,
+    albedo: f64,
+    mu0: f64,
+    band: (f64, f64),
+    reflected: bool,
+) -> f64 {
     let (nodes, weights) = gauss_legendre(32, band.0, band.1);
     let integral: f64 = nodes
         .iter()
@@ -39,7 +45,10 @@ fn monte_carlo_binned_fluxes_agree_with_solver() {
         let mut single_scattering_rejected = false;
         for bin in 0..tally.bins() {
             let (low, high) = tally.bin_band(bin);
-            for (reflected, count) in [(true, tally.reflected[bin]), (false, tally.transmitted[bin])] {
+            for (reflected, count) in [
+                (true, tally.reflected[bin]),
+                (false, tally.transmitted[bin]),
+            ] {
                 let (estimate, error) = tally.flux_with_error(count);
                 let exact = solution.flux_between(low, high, reflected).unwrap();
                 assert!(
@@ -52,7 +61,10 @@ fn monte_carlo_binned_fluxes_agree_with_solver() {
             }
         }
         // Power: the same comparison must reject the single-scattering model, or it could not fail.
-        assert!(single_scattering_rejected, "case {case} cannot tell orders apart");
+        assert!(
+            single_scattering_rejected,
+            "case {case} cannot tell orders apart"
+        );
         let (direct, error) = tally.flux_with_error(tally.direct);
         assert!((direct - solution.direct_transmitted_flux()).abs() < 4.0 * error);
         let (absorbed, error) = tally.flux_with_error(tally.absorbed);
