@@ -1,5 +1,6 @@
 // lit_side.wgsl — the per-fragment lit-side rule of sheer-normals (Frisvad, Christensen & Falster
-// 2005, §3–4), identical to `sheer_normals::lit_side_cosines` in Rust.
+// 2005, §3–4): the same rule and defined cases as `sheer_normals::lit_side_cosines` in Rust (results
+// agree up to f32 rounding).
 //
 // Prepend this file to a shader's source; it declares only `LitSide`, `lit_side_unit` and
 // `lit_side_cosines` (no entry points, no bindings). Vertex normals from sheer-normals point toward

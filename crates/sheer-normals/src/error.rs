@@ -34,6 +34,14 @@ pub enum NormalsError {
         /// Largest supported index count.
         max: usize,
     },
+    /// More vertices than `u32` indices can address.
+    #[error("vertex count {vertex_count} exceeds the supported maximum of {max}")]
+    TooManyVertices {
+        /// The requested vertex count.
+        vertex_count: usize,
+        /// Largest supported vertex count (2³²).
+        max: usize,
+    },
     /// A slice handed to a per-frame call has the wrong length.
     #[error("{what} has {actual} elements, expected {expected}")]
     LengthMismatch {

@@ -58,7 +58,8 @@ impl ValidLight {
 
 impl Light {
     /// The unit direction ω0′ from `position` toward the light, or `None` where it is undefined
-    /// (a point light exactly at `position`). Errors for a light that [`Light::validate`] rejects.
+    /// (a point light exactly at `position`). Errors: [`NormalsError::NonFiniteLight`],
+    /// [`NormalsError::LightOutOfRange`], [`NormalsError::ZeroLightDirection`].
     pub fn direction_from(&self, position: Vec3) -> Result<Option<Vec3>, NormalsError> {
         Ok(unit_or_none(self.validate()?.to_light_from(position.into())).map(Vec3::from))
     }

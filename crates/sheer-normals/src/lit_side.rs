@@ -1,5 +1,5 @@
 //! The per-fragment lit-side rule: which of the paper's rendering equations (7) or (8) applies at a
-//! fragment, with the cosines μ0 and μ it needs — in Rust here and, identically, in WGSL
+//! fragment, with the cosines μ0 and μ it needs — in Rust here and, as the same rule, in WGSL
 //! ([`LIT_SIDE_WGSL`], the file `shaders/lit_side.wgsl`).
 //!
 //! Frisvad, Christensen & Falster (2005), §3–4: the surface normal n is "always turned outwards such
@@ -9,10 +9,11 @@
 //! - n · ω < 0: the eye is on the far side, the surface is back-lit: eq. (8) with L− of eq. (5),
 //!   μ = −n · ω (the cosine with the eye's side of the slab).
 //!
-//! Interpolated normals and the terminator: vertex normals come from [`crate::NormalUpdater`] turned
-//! toward the light at each vertex, so along an edge whose two ends saw the light on different
-//! geometric sides, the interpolated normal swings through (nearly) perpendicular to the light.
-//! The rule therefore turns the *interpolated* normal toward the light again at the fragment.
+//! Interpolated normals and the terminator: vertex normals come from [`crate::NormalUpdater`]
+//! turned toward the light at each vertex. With a fixed light direction a convex combination of
+//! two such normals still has n · ω0′ > 0, so interpolation alone cannot cross the terminator; it
+//! does where ω0′ varies along an edge, i.e. for a point light close to the surface. The rule
+//! therefore turns the *interpolated* normal toward the light again at the fragment.
 //! Consequences, tested in `tests/lit_side.rs`:
 //! - μ0 ≥ 0 at every fragment, and it tends to 0 continuously from both sides of the point where the
 //!   interpolated normal is perpendicular to the light — where eq. (4) and (5) both vanish

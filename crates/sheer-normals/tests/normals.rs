@@ -146,6 +146,8 @@ fn refined_sphere_normals_approach_the_analytic_normal() {
         let errors: Vec<f64> = (2..=5)
             .map(|level| sphere_error(level, weighting))
             .collect();
+        // Shown with --nocapture; the README's accuracy table comes from here.
+        eprintln!("{weighting:?}: max angle error, levels 2..=5: {errors:?}");
         // On a midpoint-refined icosphere the triangles are not uniform, and both area and angle
         // weighting are first-order accurate there (Jin, Lewis & West 2005, "A comparison of
         // algorithms for vertex normal computation"): each level halves h, so the error halves.
@@ -519,6 +521,13 @@ fn bad_input_is_a_typed_error() {
             vertex_count: 3
         }
     );
+    assert_eq!(
+        NormalUpdater::new(usize::MAX, &[0, 1, 2]).unwrap_err(),
+        NormalsError::TooManyVertices {
+            vertex_count: usize::MAX,
+            max: (u32::MAX as usize).saturating_add(1)
+        }
+    );
     let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
     let mut updater = NormalUpdater::new(3, &[0, 1, 2]).unwrap();
     let mut normals = [Vec3::ZERO; 3];
@@ -648,4 +657,29 @@ fn positions_at_the_coordinate_limit_give_finite_unit_normals() {
             );
         }
     }
+}
+
+#[test]
+fn light_direction_from_a_point_follows_the_documented_convention() {
+    let directional = Light::Directional {
+        direction_to_light: Vec3::new(0.0, 0.0, 5.0),
+    };
+    // Directional: the given direction, normalised, wherever the point is.
+    assert_eq!(
+        directional.direction_from(Vec3::new(3.0, -2.0, 1.0)),
+        Ok(Some(Vec3::Z))
+    );
+    let point = Light::Point {
+        position: Vec3::new(0.0, 2.0, 0.0),
+    };
+    assert_eq!(point.direction_from(Vec3::ZERO), Ok(Some(Vec3::Y)));
+    // Undefined exactly at the light.
+    assert_eq!(point.direction_from(Vec3::new(0.0, 2.0, 0.0)), Ok(None));
+    assert_eq!(
+        Light::Directional {
+            direction_to_light: Vec3::ZERO
+        }
+        .direction_from(Vec3::ZERO),
+        Err(NormalsError::ZeroLightDirection)
+    );
 }
