@@ -158,7 +158,11 @@ fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
             "channel {c}: {got} vs {expected}"
         );
     }
-    assert!((f64::from(centre[3]) / alpha - 1.0).abs() < 1e-3);
+    assert!(
+        (f64::from(centre[3]) / alpha - 1.0).abs() < 1e-3,
+        "alpha {} vs {alpha}",
+        centre[3]
+    );
 }
 
 #[test]

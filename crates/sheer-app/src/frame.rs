@@ -322,6 +322,9 @@ impl FrameRenderer {
                 right
             }
         };
+        if scene.static_sheet.is_none() {
+            draw_pole(&mut image, scene, flag.light_position());
+        }
         if scene.light.marker {
             draw_light_marker(&mut image, &camera(scene), flag.light_position());
         }
@@ -365,6 +368,73 @@ pub fn camera(scene: &Scene) -> Camera {
         vertical_fov: scene.camera.vertical_fov_degrees.to_radians(),
         near: 0.05,
         far: 100.0,
+    }
+}
+
+/// Radius of the flag pole, m.
+const POLE_RADIUS: f32 = 0.015;
+
+/// The flag pole along the hoist edge: an opaque, diffuse (albedo 0.5) vertical cylinder lit by the
+/// point light, drawn over the frame like the light marker — the flag is attached to it, so it is
+/// never far behind the cloth it would hide.
+fn draw_pole(image: &mut LinearImage, scene: &Scene, light: Vec3) {
+    let cam = camera(scene);
+    let view_projection = cam.view_projection(image.width, image.height);
+    let origin = Vec3::new(
+        scene.flag.origin.x as f32,
+        scene.flag.origin.y as f32,
+        scene.flag.origin.z as f32,
+    );
+    let top = origin + Vec3::new(0.0, 0.06, 0.0);
+    let bottom = origin - Vec3::new(0.0, scene.flag.height as f32 + 1.5, 0.0);
+    let to_pixels = |p: Vec3| {
+        let clip = view_projection * p.extend(1.0);
+        (clip.w > 0.0).then(|| {
+            let ndc = clip.truncate() / clip.w;
+            glam::Vec2::new(
+                (ndc.x + 1.0) * 0.5 * image.width as f32,
+                (1.0 - ndc.y) * 0.5 * image.height as f32,
+            )
+        })
+    };
+    let (Some(a), Some(b)) = (to_pixels(top), to_pixels(bottom)) else {
+        return;
+    };
+    // Pixel half-width from the radius seen at the pole's distance (the top's, a fine approximation).
+    let side = (top - cam.eye).cross(Vec3::Y).normalize_or_zero() * POLE_RADIUS;
+    let half_width = to_pixels(top + side)
+        .map_or(1.0, |p| p.distance(a))
+        .max(1.0);
+    let axis = b - a;
+    let length_squared = axis.length_squared().max(1e-6);
+    let across = (top - cam.eye).cross(Vec3::Y).normalize_or_zero();
+    let towards_eye = Vec3::Y.cross(across);
+    let irradiance = |point: Vec3, normal: Vec3| {
+        let d = light - point;
+        let r2 = d.length_squared().max(1e-6);
+        scene.light.flux / (4.0 * std::f32::consts::PI * r2) * normal.dot(d / r2.sqrt()).max(0.0)
+    };
+    let (x0, x1) = (
+        a.x.min(b.x) - half_width - 1.0,
+        a.x.max(b.x) + half_width + 1.0,
+    );
+    let (y0, y1) = (a.y.min(b.y).max(0.0), a.y.max(b.y));
+    for y in (y0 as u32)..(y1.min(image.height as f32) as u32) {
+        for x in (x0.max(0.0) as u32)..(x1.min(image.width as f32) as u32) {
+            let p = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let t = ((p - a).dot(axis) / length_squared).clamp(0.0, 1.0);
+            let offset = (p - (a + t * axis)).perp_dot(axis.normalize_or_zero());
+            let u = offset / half_width; // −1 … 1 across the pole
+            if u.abs() > 1.0 {
+                continue;
+            }
+            let normal = (u * across + (1.0 - u * u).sqrt() * towards_eye).normalize_or_zero();
+            let point = top.lerp(bottom, t) + POLE_RADIUS * normal;
+            // Lambertian, albedo 0.5: L = ρ E / π, plus a little sky so its shadow side is not void.
+            let radiance = 0.5 * irradiance(point, normal) / std::f32::consts::PI + 0.02;
+            let i = (y * image.width + x) as usize;
+            image.pixels[i] = [radiance * 0.9, radiance * 0.8, radiance * 0.65, 0.0];
+        }
     }
 }
 

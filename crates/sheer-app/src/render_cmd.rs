@@ -16,7 +16,8 @@ use crate::scene::{Scene, ShadingModel};
 pub enum ImageFormat {
     /// 8-bit sRGB after exposure.
     Png,
-    /// Linear radiance, 32-bit float (OpenEXR), before exposure.
+    /// Linear radiance, 32-bit float (OpenEXR), before exposure; alpha = transmittance through the
+    /// cloth.
     Exr,
     /// Both, side by side.
     Both,
@@ -52,16 +53,7 @@ pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(),
         .map(str::to_ascii_lowercase);
     let result = match extension.as_deref() {
         Some("png") => image.save_png(path, exposure),
-        Some("exr") => {
-            let data: Vec<f32> = image
-                .pixels
-                .iter()
-                .flat_map(|p| [p[0], p[1], p[2]])
-                .collect();
-            image::Rgb32FImage::from_raw(image.width, image.height, data)
-                .ok_or_else(|| CliError::new("internal: image size mismatch"))?
-                .save(path)
-        }
+        Some("exr") => return save_exr_rgba(image, path),
         _ => {
             return Err(CliError::new(format!(
                 "{}: unknown image type (use .png or .exr)",

@@ -243,8 +243,11 @@ pub struct Scene {
 impl Default for Scene {
     fn default() -> Self {
         let mut simulation = SimParams::default();
-        // A steady breeze along the flag with a little cross-wind, gusting.
-        simulation.wind.velocity = sheer_cloth::glam::DVec3::new(4.0, 0.0, 1.0);
+        // A fresh breeze across the flag at 27° from its plane, gusting and turbulent: enough to make it
+        // wave rather than stream flat.
+        simulation.wind.velocity = sheer_cloth::glam::DVec3::new(5.0, 0.0, 2.5);
+        simulation.wind.gust_strength = 0.5;
+        simulation.wind.turbulence = 0.4;
         Scene {
             flag: GridSpec::default(),
             simulation,

@@ -1,31 +1,14 @@
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::*;
 fn main() {
-    let v: usize = std::env::args().nth(1).unwrap().parse().unwrap();
-    let frames: usize = std::env::args()
-        .nth(2)
-        .map(|s| s.parse().unwrap())
-        .unwrap_or(100);
-    let model = ClothModel::grid(&GridSpec::default())
-        .unwrap()
-        .with_hoist_pinned()
-        .unwrap();
+    for wind in [8.0, 10.0, 12.0, 16.0] { for per in [false, true] {
+    let spec = GridSpec { areal_density: 0.1, ..GridSpec::default() };
+    let model = ClothModel::grid(&spec).unwrap().with_hoist_pinned().unwrap();
     let mut p = SimParams::default();
-    p.wind.velocity = DVec3::new(6.0, 0.0, 1.0);
-    match v {
-        1 => p.wind.velocity = DVec3::ZERO,
-        2 => {
-            p.wind.velocity = DVec3::ZERO;
-            p.shear.enabled = false;
-            p.bend.enabled = false;
-        }
-        3 => {
-            p.wind.per_substep = false;
-        }
-        _ => {}
-    }
+    p.wind.velocity = DVec3::new(wind, 0.0, wind/4.0);
+    p.wind.per_substep = per;
     let mut sim = Simulation::new(model, p).unwrap();
-    for _ in 0..frames {
-        sim.step(1.0 / 60.0).unwrap();
-    }
+    let r = (0..600).try_for_each(|_| sim.step(1.0/60.0).map(|_| ()));
+    println!("wind {wind} per_substep {per}: {:?}", r.map_err(|e| e.to_string()));
+    }}
 }

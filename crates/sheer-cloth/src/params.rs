@@ -248,7 +248,7 @@ pub struct Wind {
     /// Re-evaluate the aerodynamic forces every sub-step (default) instead of once per `step`, held over
     /// its sub-steps. Held forces cost a twentieth but treat drag explicitly over the whole frame: its
     /// rate `ρ C_D |u| / (2 × areal density)` times the frame time must stay well below 2, which fails
-    /// for light fabric in strong wind (0.1 kg/m² at 8 m/s diverges at 60 Hz; tested).
+    /// for light fabric in strong wind (0.1 kg/m² at 10–12 m/s diverges at 60 Hz; tested).
     pub per_substep: bool,
 }
 
@@ -344,7 +344,7 @@ impl Default for SimParams {
             method: Method::default(),
             stretch: SpringParams::new(1000.0, 0.01),
             shear: SpringParams::new(100.0, 0.002),
-            bend: SpringParams::new(5.0, 0.0005),
+            bend: SpringParams::new(15.0, 0.001),
             gravity: DVec3::new(0.0, -9.81, 0.0),
             air_damping: 0.05,
             wind: Wind::default(),

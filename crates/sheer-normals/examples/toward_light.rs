@@ -2,7 +2,7 @@
 //! point light first above it, then below it: every normal is the exact plane normal, turned toward
 //! the light. Then the per-fragment rule for an eye above the sheet.
 //!
-//! Run: `cargo run -p sheer-normals --release --example flat_sheet`
+//! Run: `cargo run -p sheer-normals --release --example toward_light`
 
 use glam::Vec3;
 use sheer_normals::{Light, NormalUpdater, NormalsError, lit_side_cosines};
