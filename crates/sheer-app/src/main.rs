@@ -2,6 +2,7 @@
 //!
 //! Every failure prints one line, `error: …`, and exits with status 1 (usage errors: clap's status 2).
 
+mod assets;
 mod bench_render;
 mod bench_sim;
 mod frame;
@@ -115,9 +116,18 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Evaluate the thin-slab model for CSV rows `tau1,albedo,mu0,mu`.
     Slab(slab_cmd::SlabArgs),
+    /// Regenerate the procedural assets: the Faroe flag texture and the watercolour painting.
+    Assets(AssetsArgs),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(BenchCommand),
+}
+
+#[derive(Debug, clap::Args)]
+struct AssetsArgs {
+    /// Directory to write faroe_flag.png and faroe_landscape.png into.
+    #[arg(long, default_value = "assets")]
+    out: std::path::PathBuf,
 }
 
 #[derive(Debug, Subcommand)]
@@ -144,6 +154,11 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_cmd::run_render(args),
         Some(Command::Figure2(args)) => render_cmd::run_figure2(args),
         Some(Command::Slab(args)) => slab_cmd::run(args),
+        Some(Command::Assets(args)) => std::fs::create_dir_all(&args.out)
+            .map_err(|e| CliError::new(format!("cannot create {}: {e}", args.out.display())))
+            .and_then(|()| {
+                assets::write_assets(&args.out).map_err(|e| CliError::new(e.to_string()))
+            }),
         Some(Command::Simulate(args)) => simulate::run(args),
         Some(Command::Bench(BenchCommand::Sim(args))) => bench_sim::run(args),
         Some(Command::Bench(BenchCommand::Render(args))) => bench_render::run(args),

@@ -73,7 +73,7 @@ impl Default for ShadingSection {
             thickness_texture: None,
             convention: Convention::NormalToBeam,
             baseline_alpha: 0.2,
-            exposure: 1.0,
+            exposure: 0.5,
         }
     }
 }
@@ -99,7 +99,7 @@ pub struct LightSection {
 impl Default for LightSection {
     fn default() -> Self {
         LightSection {
-            flux: 60.0,
+            flux: 250.0,
             centre: [0.55, 0.4, 0.0],
             radius: 1.6,
             period: 12.0,
@@ -163,7 +163,7 @@ impl Default for BackgroundSection {
         BackgroundSection {
             image: Some("faroe_landscape.png".into()),
             colour: [0.2, 0.2, 0.2],
-            radiance_scale: 0.6,
+            radiance_scale: 1.2,
         }
     }
 }
