@@ -35,7 +35,7 @@ impl NumberField {
     fn new(label: &'static str, value: f64) -> Self {
         NumberField {
             label,
-            text: format!("{value}"),
+            text: format!("{}", value as f32),
             error: None,
         }
     }
@@ -235,7 +235,7 @@ impl SheerApp {
         ui.label("Thin cloth as a thin slab (Frisvad et al. 2005)");
         ui.separator();
         let mut shading_changed = false;
-        ui.collapsing("Shading", |ui| {
+        egui::CollapsingHeader::new("Shading").default_open(true).show(ui, |ui| {
             let s = &mut self.flag.scene.shading;
             ui.horizontal(|ui| {
                 ui.selectable_value(&mut s.model, ShadingModel::ThinSlab, "thin slab");
@@ -257,7 +257,7 @@ impl SheerApp {
                 shading_changed = true;
             }
         });
-        ui.collapsing("Light", |ui| {
+        egui::CollapsingHeader::new("Light").default_open(true).show(ui, |ui| {
             let l = &mut self.flag.scene.light;
             if let Some(v) = self.fields.flux.show(ui, in_range(0.0, 1e4)) {
                 l.flux = v as f32;
