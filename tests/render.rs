@@ -169,8 +169,8 @@ fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
     let expected = 0.3 * alpha + l_plus;
     // The pixel centre sees the sheet within 0.3° of the normal (μ within 5e-5 of 1); the target is
     // 16-bit float at worst: 1e-3 relative covers both.
-    for c in 0..3 {
-        let got = f64::from(centre[c]);
+    for (c, &value) in centre.iter().take(3).enumerate() {
+        let got = f64::from(value);
         assert!(
             (got / expected - 1.0).abs() < 1e-3,
             "channel {c}: {got} vs {expected}"

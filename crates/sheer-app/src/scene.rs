@@ -468,8 +468,10 @@ mod tests {
     fn the_shipped_default_scene_documents_exactly_the_defaults() {
         let path = assets().join("default.scene.toml");
         let scene = Scene::load(&path).unwrap();
-        let mut default = Scene::default();
-        default.base_dir = scene.base_dir.clone();
+        let default = Scene {
+            base_dir: scene.base_dir.clone(),
+            ..Scene::default()
+        };
         assert_eq!(scene, default);
         // And every key of the defaults appears in the file (the file documents them all).
         let text = std::fs::read_to_string(&path).unwrap();
@@ -486,8 +488,10 @@ mod tests {
 
     #[test]
     fn an_empty_file_is_the_default_scene() {
-        let mut default = Scene::default();
-        default.base_dir = assets();
+        let default = Scene {
+            base_dir: assets(),
+            ..Scene::default()
+        };
         assert_eq!(parse("").unwrap(), default);
     }
 

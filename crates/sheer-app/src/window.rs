@@ -235,54 +235,58 @@ impl SheerApp {
         ui.label("Thin cloth as a thin slab (Frisvad et al. 2005)");
         ui.separator();
         let mut shading_changed = false;
-        egui::CollapsingHeader::new("Shading").default_open(true).show(ui, |ui| {
-            let s = &mut self.flag.scene.shading;
-            ui.horizontal(|ui| {
-                ui.selectable_value(&mut s.model, ShadingModel::ThinSlab, "thin slab");
-                ui.selectable_value(&mut s.model, ShadingModel::Baseline, "baseline");
-                ui.selectable_value(&mut s.model, ShadingModel::Split, "split");
+        egui::CollapsingHeader::new("Shading")
+            .default_open(true)
+            .show(ui, |ui| {
+                let s = &mut self.flag.scene.shading;
+                ui.horizontal(|ui| {
+                    ui.selectable_value(&mut s.model, ShadingModel::ThinSlab, "thin slab");
+                    ui.selectable_value(&mut s.model, ShadingModel::Baseline, "baseline");
+                    ui.selectable_value(&mut s.model, ShadingModel::Split, "split");
+                });
+                ui.horizontal(|ui| {
+                    ui.label("path");
+                    ui.selectable_value(&mut s.path, EvaluationPathName::Fragment, "fragment");
+                    ui.selectable_value(&mut s.path, EvaluationPathName::Vertex, "vertex");
+                    ui.selectable_value(&mut s.path, EvaluationPathName::Cpu, "CPU");
+                });
+                if let Some(v) = self.fields.optical_thickness.show(ui, in_range(1e-3, 50.0)) {
+                    s.optical_thickness = [v as f32; 3];
+                    shading_changed = true;
+                }
+                if let Some(v) = self.fields.albedo_scale.show(ui, in_range(0.0, 1.0)) {
+                    s.albedo_scale = [v as f32; 3];
+                    shading_changed = true;
+                }
             });
-            ui.horizontal(|ui| {
-                ui.label("path");
-                ui.selectable_value(&mut s.path, EvaluationPathName::Fragment, "fragment");
-                ui.selectable_value(&mut s.path, EvaluationPathName::Vertex, "vertex");
-                ui.selectable_value(&mut s.path, EvaluationPathName::Cpu, "CPU");
+        egui::CollapsingHeader::new("Light")
+            .default_open(true)
+            .show(ui, |ui| {
+                let l = &mut self.flag.scene.light;
+                if let Some(v) = self.fields.flux.show(ui, in_range(0.0, 1e4)) {
+                    l.flux = v as f32;
+                    shading_changed = true;
+                }
+                if let Some(v) = self.fields.radius.show(ui, in_range(0.05, 20.0)) {
+                    l.radius = v as f32;
+                }
+                if let Some(v) = self.fields.period.show(ui, in_range(-600.0, 600.0)) {
+                    // Keep the light where it is when the speed changes.
+                    let t = self.flag.time;
+                    let old = if l.period == 0.0 {
+                        0.0
+                    } else {
+                        std::f32::consts::TAU * t / l.period
+                    };
+                    let new = if v == 0.0 {
+                        0.0
+                    } else {
+                        std::f32::consts::TAU * t / v as f32
+                    };
+                    l.phase += old - new;
+                    l.period = v as f32;
+                }
             });
-            if let Some(v) = self.fields.optical_thickness.show(ui, in_range(1e-3, 50.0)) {
-                s.optical_thickness = [v as f32; 3];
-                shading_changed = true;
-            }
-            if let Some(v) = self.fields.albedo_scale.show(ui, in_range(0.0, 1.0)) {
-                s.albedo_scale = [v as f32; 3];
-                shading_changed = true;
-            }
-        });
-        egui::CollapsingHeader::new("Light").default_open(true).show(ui, |ui| {
-            let l = &mut self.flag.scene.light;
-            if let Some(v) = self.fields.flux.show(ui, in_range(0.0, 1e4)) {
-                l.flux = v as f32;
-                shading_changed = true;
-            }
-            if let Some(v) = self.fields.radius.show(ui, in_range(0.05, 20.0)) {
-                l.radius = v as f32;
-            }
-            if let Some(v) = self.fields.period.show(ui, in_range(-600.0, 600.0)) {
-                // Keep the light where it is when the speed changes.
-                let t = self.flag.time;
-                let old = if l.period == 0.0 {
-                    0.0
-                } else {
-                    std::f32::consts::TAU * t / l.period
-                };
-                let new = if v == 0.0 {
-                    0.0
-                } else {
-                    std::f32::consts::TAU * t / v as f32
-                };
-                l.phase += old - new;
-                l.period = v as f32;
-            }
-        });
         ui.collapsing("Wind", |ui| {
             let mut params = self.flag.scene.simulation.clone();
             let mut changed = false;
@@ -371,10 +375,10 @@ impl SheerApp {
                     self.paused = true;
                     self.step_once = true;
                 }
-                if ui.button("reset").clicked() {
-                    if let Err(e) = self.flag.reset() {
-                        self.notice = Some(e.to_string());
-                    }
+                if ui.button("reset").clicked()
+                    && let Err(e) = self.flag.reset()
+                {
+                    self.notice = Some(e.to_string());
                 }
             });
         });
