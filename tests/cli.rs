@@ -98,3 +98,85 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
         assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn simulate_writes_one_obj_per_frame() {
+    let dir = std::env::temp_dir().join(format!("sheer-simulate-{}", std::process::id()));
+    let out = sheer(&[
+        "simulate",
+        "--frames",
+        "3",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for frame in 0..3 {
+        let text = std::fs::read_to_string(dir.join(format!("frame_{frame:04}.obj"))).unwrap();
+        // The default flag: 64 × 46 particles, 2 × 63 × 45 triangles, every vertex finite.
+        let vertices: Vec<[f64; 3]> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("v "))
+            .map(|l| {
+                let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        assert_eq!(vertices.len(), 64 * 46);
+        assert!(vertices.iter().flatten().all(|x| x.is_finite()));
+        assert_eq!(
+            text.lines().filter(|l| l.starts_with("vt ")).count(),
+            64 * 46
+        );
+        assert_eq!(
+            text.lines().filter(|l| l.starts_with("f ")).count(),
+            2 * 63 * 45
+        );
+        // The hoist stays on the pole: vertex 0 is pinned at the top of the hoist.
+        assert_eq!(vertices[0], [0.0, 0.8, 0.0]);
+    }
+    assert!(!dir.join("frame_0003.obj").exists());
+}
+
+#[test]
+fn bad_scene_files_are_one_line_errors_naming_the_problem() {
+    let dir = std::env::temp_dir().join(format!("sheer-badscene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("bad.toml");
+    for (text, needle) in [
+        ("[light]\nflux = -3.0\n", "light.flux"),
+        ("[flag]\ncolumnz = 3\n", "columnz"),
+        ("this is not toml", "line 1"),
+    ] {
+        std::fs::write(&scene, text).unwrap();
+        let out = sheer(&[
+            "simulate",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--out-dir",
+            dir.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(1), "{text}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(needle), "{text}: {stderr}");
+    }
+    let out = sheer(&[
+        "simulate",
+        "--scene",
+        "/nonexistent/scene.toml",
+        "--out-dir",
+        "/tmp",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        String::from_utf8(out.stderr)
+            .unwrap()
+            .contains("cannot read scene")
+    );
+}
