@@ -315,16 +315,16 @@ fn smoothstep(edge0: f64, edge1: f64, x: f64) -> f64 {
 /// Pigments, as the sRGB colour each shows glazed at density 1 over white paper.
 mod palette {
     pub const PAPER: [u8; 3] = [0xF8, 0xF4, 0xEA];
-    pub const SKY_ULTRAMARINE: [u8; 3] = [0x5A, 0x82, 0xC4];
-    pub const SKY_CERULEAN: [u8; 3] = [0x8C, 0xBC, 0xDE];
+    pub const SKY_ULTRAMARINE: [u8; 3] = [0x6A, 0x8C, 0xC0];
+    pub const SKY_CERULEAN: [u8; 3] = [0x9C, 0xC2, 0xDC];
     pub const PAYNES_GREY: [u8; 3] = [0x6A, 0x74, 0x84];
     pub const YELLOW_OCHRE: [u8; 3] = [0xE0, 0xC0, 0x78];
     pub const SAP_GREEN: [u8; 3] = [0x6A, 0x9A, 0x38];
     pub const YELLOW_GREEN: [u8; 3] = [0x9C, 0xBA, 0x4A];
     pub const HOOKERS_GREEN: [u8; 3] = [0x3A, 0x66, 0x44];
     pub const SEPIA: [u8; 3] = [0x6E, 0x5C, 0x4C];
-    pub const SEA_PRUSSIAN: [u8; 3] = [0x2A, 0x64, 0x86];
-    pub const SEA_GREEN: [u8; 3] = [0x4A, 0x8A, 0x90];
+    pub const SEA_PRUSSIAN: [u8; 3] = [0x34, 0x5E, 0x88];
+    pub const SEA_GREEN: [u8; 3] = [0x4E, 0x82, 0x8A];
 }
 
 /// Sea level (the horizon) as a fraction of the image height from the top.
@@ -335,6 +335,13 @@ const HORIZON: f64 = 0.52;
 struct Bloom {
     centre: (f64, f64),
     radius: f64,
+}
+
+/// A bank of cloud: an ellipse (half sizes in image heights) with a noisy outline.
+#[derive(Clone, Copy, Debug)]
+struct CloudBank {
+    centre: (f64, f64),
+    half_size: (f64, f64),
 }
 
 /// Signed distance (positive inside, in image heights) of the land masses, for one pixel.
@@ -373,6 +380,7 @@ struct Painting {
     paper: [f64; 3],
     pigments: Pigments,
     blooms: Vec<Bloom>,
+    clouds: Vec<CloudBank>,
     // Independent noise streams, one per purpose, so changing one effect does not reshuffle the others.
     grain: ValueNoise,
     edge: ValueNoise,
@@ -428,6 +436,7 @@ impl Painting {
                 sea_green: pigment(palette::SEA_GREEN),
             },
             blooms,
+            clouds: Self::scatter_clouds(seed),
             grain: stream(1),
             edge: stream(2),
             brush: stream(3),
@@ -442,6 +451,27 @@ impl Painting {
         }
     }
 
+    /// Four to six banks of cloud in the upper sky (image-width × image-height units).
+    fn scatter_clouds(seed: u64) -> Vec<CloudBank> {
+        let mut state = mix64(seed ^ 0xC10D_C10D_C10D_C10D);
+        let mut next = || {
+            state = mix64(state.wrapping_add(0x9E37_79B9_7F4A_7C15));
+            unit_from_bits(state)
+        };
+        let count = 4 + (next() * 3.0) as usize;
+        (0..count)
+            .map(|index| {
+                // Spread across the width: one bank per slot, jittered within it.
+                let u = (index as f64 + 0.2 + 0.6 * next()) / count as f64;
+                let v = 0.08 + 0.28 * next();
+                CloudBank {
+                    centre: (u, v),
+                    half_size: (0.12 + 0.12 * next(), 0.035 + 0.035 * next()),
+                }
+            })
+            .collect()
+    }
+
     /// A handful of blooms at seeded places in the sky and on the land (in image-width × image-height units).
     fn scatter_blooms(seed: u64) -> Vec<Bloom> {
         let mut state = mix64(seed ^ 0xB100_B100_B100_B100);
@@ -449,7 +479,7 @@ impl Painting {
             state = mix64(state.wrapping_add(0x9E37_79B9_7F4A_7C15));
             unit_from_bits(state)
         };
-        (0..9)
+        (0..6)
             .map(|_| {
                 let u = 0.06 + 0.88 * next();
                 let v = 0.06 + 0.58 * next();
@@ -482,9 +512,10 @@ impl Painting {
 
     /// Top of the near headland (left), image heights from the top, at horizontal position `u`.
     fn near_top(&self, u: f64) -> f64 {
-        // A grassy shoulder falling towards the cliff edge, with low undulations.
-        0.20 + 0.10 * (u / 0.42).clamp(0.0, 1.2).powi(2)
-            + 0.03 * (self.profile.fbm(u * 7.0, 0.5, 4) - 0.5)
+        // A grassy crest, then a convex shoulder falling to the cliff edge, with low undulations.
+        0.27 - 0.11 * (-((u - 0.2) / 0.14).powi(2)).exp()
+            + 0.05 * (u / 0.42).clamp(0.0, 1.2).powi(3)
+            + 0.025 * (self.profile.fbm(u * 7.0, 0.5, 4) - 0.5)
     }
 
     /// Horizontal position of the near headland's sea cliff at height `v`.
@@ -549,10 +580,19 @@ impl Painting {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// Top of the sea stack nearest to horizontal position `u`.
+    fn stack_top(&self, u: f64) -> f64 {
+        let nearest = Self::STACKS
+            .iter()
+            .min_by(|a, b| (u - a.0).abs().total_cmp(&(u - b.0).abs()));
+        nearest.map_or(0.0, |&(_, _, top)| top)
+    }
+
     /// A pale flat-topped island on the horizon.
     fn far_distance(&self, u: f64, v: f64) -> f64 {
         let shape = (1.0 - ((u - 0.53) / 0.15).powi(2)).max(0.0).powf(0.5);
-        let top = HORIZON - 0.05 * shape + 0.006 * (self.profile.fbm(u * 20.0, 4.4, 3) - 0.5);
+        let top =
+            HORIZON + 0.006 - 0.056 * shape + 0.006 * (self.profile.fbm(u * 20.0, 4.4, 3) - 0.5);
         (v - top).min(HORIZON + 0.004 - v)
     }
 
@@ -571,6 +611,24 @@ impl Painting {
         let to_border = self.horizontal(u.min(1.0 - u)).min(v.min(1.0 - v));
         let margin = 0.022 + 0.012 * self.edge.fbm(self.horizontal(u) * 9.0 + 40.0, v * 9.0, 3);
         to_border - margin
+    }
+
+    /// Fraction (0–1) of the sky wash lifted by clouds at (u, v): the union of seeded cloud banks, each an
+    /// ellipse whose outline is torn by noise so that it reads as a soft, lifted wet-in-wet shape.
+    fn cloud_cover(&self, u: f64, v: f64) -> f64 {
+        let x = self.horizontal(u);
+        let tear = self.cloud.fbm(x * 4.0 + 11.0, v * 8.0, 5) - 0.5;
+        self.clouds
+            .iter()
+            .map(|bank| {
+                let dx = self.horizontal(u - bank.centre.0) / bank.half_size.0;
+                let dy = (v - bank.centre.1) / bank.half_size.1;
+                // Flatter bottoms: below the centre the ellipse is squashed.
+                let dy = if dy > 0.0 { 1.8 * dy } else { dy };
+                let inside = 1.0 - (dx * dx + dy * dy).sqrt() + 1.4 * tear;
+                smoothstep(0.0, 0.25, inside)
+            })
+            .fold(0.0, f64::max)
     }
 
     /// Multiplier of all washes inside and around the blooms: paler inside, darker at the cauliflower rim.
@@ -595,7 +653,7 @@ impl Painting {
             let inside = outline - r;
             let rim_width = 0.004;
             factor *= if inside > 0.0 {
-                0.82 + 0.38 * (-inside / rim_width).exp()
+                0.88 + 0.32 * (-inside / rim_width).exp()
             } else {
                 1.0 + 0.12 * (inside / (0.5 * rim_width)).exp()
             };
@@ -613,7 +671,8 @@ impl Painting {
 
         // Paper texture: a fine grain (a few px) and the granulation it causes in the heavier pigments.
         let grain = self.grain.fbm(x * 320.0, v * 320.0, 2);
-        let granulation = 1.0 + 0.9 * (grain - 0.5);
+        let clumps = self.grain.fbm(x * 90.0 + 50.0, v * 90.0, 2);
+        let granulation = 1.0 + 0.3 * (grain - 0.5) + 0.45 * (clumps - 0.5);
         let brush = self.brush.fbm(x * 2.2, v * 4.0, 5);
         let mut washes = Washes::default();
 
@@ -621,54 +680,70 @@ impl Painting {
         let gap = 1.5 * self.pixel * smoothstep(0.55, 0.7, self.edge.fbm(x * 14.0, v * 14.0, 2));
         let reserve = -land_max - gap;
 
+        // Dried "tide marks": thin rims along level sets of a slow noise, where puddles of a wash dried last.
+        let tide_level = self.brush.fbm(x * 3.0 + 7.0, v * 3.0, 3) - 0.5;
+        let tide = 1.0 + 0.25 * (-(tide_level / 0.008).powi(2)).exp();
+
         // --- Sky: graded wash, ultramarine at the top to pale cerulean and a warm glow at the horizon.
         let sky_edge = (HORIZON + 0.004 - v).min(reserve).min(margin);
         if sky_edge > -2.0 * self.pixel {
             let height = (v / HORIZON).clamp(0.0, 1.0);
-            let cloud_zone = (-((v - 0.2) / 0.13).powi(2)).exp();
-            let cloudiness = self.cloud.fbm(x * 2.0 + 11.0, v * 5.0, 6);
-            let cloud = smoothstep(0.46, 0.62, cloudiness) * cloud_zone;
+            let cloud = self.cloud_cover(u, v);
             let profile = self.wash_profile(sky_edge, 0.45, 0.006);
             let strokes = 0.7 + 0.6 * brush;
-            let blue = (0.3 + 0.85 * (1.0 - height).powf(1.3)) * strokes * (1.0 - 0.9 * cloud);
+            let blue = (0.25 + 0.8 * (1.0 - height).powf(1.3)) * strokes * (1.0 - 0.92 * cloud);
             // A faint rim where the sky wash dried around the lifted cloud.
             let cloud_rim = 1.0 + 1.2 * cloud * (1.0 - cloud);
             washes.glaze_mix(
                 &p.sky_cerulean,
                 &p.sky_ultramarine,
                 (1.0 - height).powf(0.7),
-                blue * profile * granulation * cloud_rim,
+                blue * profile * granulation * cloud_rim * tide,
             );
             washes.glaze(
                 &p.yellow_ochre,
-                0.22 * smoothstep(0.55, 1.0, height) * profile,
+                0.2 * smoothstep(0.55, 1.0, height) * profile,
             );
             // Grey bellies of the clouds, mottled, heavier lower down.
-            let shade = self.cloud_shade.fbm(x * 4.0, v * 8.0, 5);
-            let belly = cloud * smoothstep(0.4, 0.65, shade) * (0.4 + 2.0 * (v - 0.1).max(0.0));
-            washes.glaze(&p.paynes_grey, 0.55 * belly * profile * granulation);
+            let shade = self.cloud_shade.fbm(x * 3.0, v * 6.0, 5);
+            let belly = cloud * smoothstep(0.4, 0.62, shade) * (0.5 + 2.0 * (v - 0.1).max(0.0));
+            washes.glaze(&p.paynes_grey, 0.6 * belly * profile * granulation);
         }
 
-        // --- Sea: layered, darker towards the viewer, horizontal brush streaks and lifted wave crests.
+        // --- Sea: two layered washes, darker towards the viewer, horizontal brush streaks and lifted crests.
         let sea_edge = (v - HORIZON).min(reserve).min(margin);
         if sea_edge > -2.0 * self.pixel {
             let depth = ((v - HORIZON) / (1.0 - HORIZON)).clamp(0.0, 1.0);
             let streak = self.sea_streak.fbm(x * 3.0, v * 90.0, 5);
-            let crest = self.sea_crest.fbm(x * 9.0, v * 180.0, 3);
-            let lifted = 1.0 - 0.85 * smoothstep(0.64, 0.74, crest) * smoothstep(0.02, 0.12, depth);
+            let crest = self.sea_crest.fbm(x * 6.0, v * 200.0, 3);
+            let crest_patches =
+                smoothstep(0.42, 0.62, self.sea_crest.fbm(x * 2.0 + 30.0, v * 5.0, 3));
+            let lifted = 1.0
+                - 0.8
+                    * smoothstep(0.69, 0.77, crest)
+                    * crest_patches
+                    * smoothstep(0.03, 0.15, depth);
             let profile = self.wash_profile(sea_edge, 0.6, 0.004);
-            let density = (0.45 + 0.8 * depth.powf(0.8)) * (0.6 + 0.8 * streak) * lifted;
+            let density = (0.45 + 0.75 * depth.powf(0.8)) * (0.65 + 0.7 * streak) * lifted;
             let hue = self.hue.fbm(x * 1.5, v * 6.0, 4);
             washes.glaze_mix(
                 &p.sea_prussian,
                 &p.sea_green,
-                smoothstep(0.3, 0.7, hue),
+                0.5 * smoothstep(0.3, 0.7, hue),
                 density * profile * granulation,
             );
             // A greyer band just under the horizon, where the sea reflects the overcast.
             washes.glaze(
                 &p.paynes_grey,
                 0.35 * (1.0 - smoothstep(0.0, 0.15, depth)) * profile,
+            );
+            // Second layer over the foreground, laid after the first dried: its own wavy dried edge.
+            let layer_line = 0.74 + 0.03 * (self.sea_streak.fbm(x * 1.5 + 9.0, 2.0, 4) - 0.5);
+            let layer_edge = (v - layer_line + self.edge_jitter(u, v, 0.003)).min(sea_edge);
+            let layer = self.wash_profile(layer_edge, 0.7, 0.004);
+            washes.glaze(
+                &p.sea_prussian,
+                0.2 * layer * (0.6 + 0.8 * streak) * lifted * granulation,
             );
             // Reflections of the land masses: dark, streaky, fading away from the waterline.
             let reflection = self.reflection(u, v) * (0.5 + streak) * lifted;
@@ -691,44 +766,49 @@ impl Painting {
             let edge = land.middle.min(margin);
             let profile = self.wash_profile(edge, 0.55, 0.004);
             let hue = self.hue.fbm(x * 4.0, v * 4.0, 4);
+            let below_top = v - self.middle_top(u);
             let slope_strokes = self.brush.fbm(x * 5.0 - v * 3.0, v * 14.0, 4);
             washes.glaze_mix(
                 &p.sap_green,
                 &p.yellow_green,
                 hue,
-                (0.55 + 0.4 * slope_strokes) * profile,
+                (0.5 + 0.4 * slope_strokes) * profile * tide,
             );
-            washes.glaze(&p.paynes_grey, 0.35 * profile * granulation);
+            washes.glaze(&p.paynes_grey, 0.3 * profile * granulation);
+            // Lower slopes in the shadow of the ridge.
+            let shadow_edge = below_top - 0.06 - 0.06 * self.brush.fbm(x * 5.0, 8.8, 3)
+                + self.edge_jitter(u, v, 0.004);
+            let shadow = self.wash_profile(shadow_edge.min(edge), 0.5, 0.004);
+            washes.glaze_mix(
+                &p.hookers_green,
+                &p.paynes_grey,
+                0.4,
+                (0.25 + 0.2 * slope_strokes) * shadow,
+            );
             let face_depth = self.horizontal(u - self.middle_face(v));
-            let rock = self.rock_weight(
-                face_depth,
-                v - self.middle_top(u),
-                Self::MIDDLE_BASE - v,
-                u,
-                v,
-                0.6,
-            );
+            let (rock, ledge) =
+                self.rock_weight(face_depth, below_top, Self::MIDDLE_BASE - v, u, v, 0.7);
             washes.glaze_mix(
                 &p.sepia,
                 &p.paynes_grey,
                 0.6,
-                0.7 * rock * profile * granulation,
+                0.75 * rock * profile * granulation,
             );
+            washes.glaze(&p.sap_green, 0.4 * ledge * profile);
         }
 
         // --- Sea stacks: dark basalt with a green cap.
         if land.stacks > -2.0 * self.pixel {
             let profile = self.wash_profile(land.stacks.min(margin), 0.5, 0.003);
-            let cap = 1.0 - smoothstep(0.01, 0.03, land.stacks.min(v - 0.39));
-            let cap = cap * smoothstep(0.0, 0.015, Self::STACK_BASE - 0.1 - v);
-            let strata = self.strata_pattern(u, v);
+            let cap = 1.0 - smoothstep(0.008, 0.025, v - self.stack_top(u));
+            let ledge = self.strata_ledge(u, v);
             washes.glaze_mix(
                 &p.sepia,
                 &p.paynes_grey,
                 0.55,
-                (0.65 + 0.35 * strata) * profile * granulation,
+                (0.95 - 0.35 * ledge) * (1.0 - 0.5 * cap) * profile * granulation,
             );
-            washes.glaze(&p.sap_green, 0.5 * cap * profile);
+            washes.glaze(&p.sap_green, (0.7 * cap + 0.3 * ledge) * profile);
         }
 
         // --- Near headland: sunlit grass shoulder, darker slope, the basalt sea cliff in shade.
@@ -738,28 +818,30 @@ impl Painting {
             let hue = self.hue.fbm(x * 3.0 + 5.0, v * 3.0, 5);
             let below_top = v - self.near_top(u);
             let slope_strokes = self.brush.fbm(x * 4.0 + v * 6.0, v * 16.0 - x * 2.0, 5);
-            let grass = (0.75 + 0.55 * slope_strokes) * profile;
+            let grass = (0.6 + 0.55 * slope_strokes) * profile * tide;
             washes.glaze_mix(
                 &p.yellow_green,
                 &p.sap_green,
                 smoothstep(0.3, 0.7, hue),
                 grass,
             );
-            washes.glaze(&p.yellow_ochre, 0.35 * (1.0 - hue) * profile);
+            washes.glaze(&p.yellow_ochre, 0.3 * (1.0 - hue) * profile);
             // Second, darker glaze lower down the slope, with its own dried edge.
-            let shadow_edge = below_top - 0.05 - 0.05 * self.brush.fbm(x * 6.0, 3.3, 3)
+            let shadow_edge = below_top - 0.09 - 0.08 * self.brush.fbm(x * 6.0, 3.3, 3)
                 + self.edge_jitter(u, v, 0.004);
             let shadow = self.wash_profile(shadow_edge.min(edge), 0.5, 0.004);
-            washes.glaze(&p.hookers_green, (0.55 + 0.3 * slope_strokes) * shadow);
+            washes.glaze(&p.hookers_green, (0.3 + 0.3 * slope_strokes) * shadow);
             let face_depth = self.horizontal(self.near_face(v) - u);
-            let rock = self.rock_weight(face_depth, below_top, self.near_base(u) - v, u, v, 1.0);
+            let (rock, ledge) =
+                self.rock_weight(face_depth, below_top, self.near_base(u) - v, u, v, 1.0);
             washes.glaze_mix(
                 &p.sepia,
                 &p.paynes_grey,
                 0.45,
-                1.05 * rock * profile * granulation,
+                1.1 * rock * profile * granulation,
             );
             washes.glaze(&p.sky_ultramarine, 0.3 * rock * profile);
+            washes.glaze(&p.sap_green, 0.5 * ledge * profile);
         }
 
         // Blooms move pigment, they do not add any; the paper margin stays clean.
@@ -772,15 +854,15 @@ impl Painting {
         std::array::from_fn(|c| self.paper[c] * paper_grain * (-washes.absorbance[c] * bloom).exp())
     }
 
-    /// Horizontal basalt layering: 1 on rock bands, lower on the grassy ledges between them.
-    fn strata_pattern(&self, u: f64, v: f64) -> f64 {
+    /// Horizontal basalt layering: 1 on the thin grassy ledges between lava flows, 0 on the rock between them.
+    fn strata_ledge(&self, u: f64, v: f64) -> f64 {
         let wobble = self.strata.fbm(self.horizontal(u) * 3.0, v * 3.0, 4);
-        let phase = (v * 55.0 + 6.0 * wobble) * std::f64::consts::TAU;
-        smoothstep(-0.3, 0.5, phase.sin())
+        let phase = (v * 32.0 + 5.0 * wobble) * std::f64::consts::TAU;
+        smoothstep(0.6, 0.95, phase.sin())
     }
 
-    /// Weight (0–1) of the dark rock wash on a headland: strong on the sea cliff (within a noisy depth of the face
-    /// and along the waterline), broken by grassy ledges of the basalt strata, none on the grass shoulder.
+    /// Weights (0–1) of the dark rock wash and of the green ledges on a headland's cliff: rock within a noisy
+    /// depth of the face and along the waterline, none on the grass shoulder; ledges interrupt the rock.
     fn rock_weight(
         &self,
         face_depth: f64,
@@ -789,20 +871,21 @@ impl Painting {
         u: f64,
         v: f64,
         scale: f64,
-    ) -> f64 {
+    ) -> (f64, f64) {
         let x = self.horizontal(u);
         let reach = scale
-            * (0.03 + 0.09 * smoothstep(0.0, 0.3, below_top))
-            * (0.6 + 0.8 * self.strata.fbm(x * 5.0, v * 12.0, 4));
+            * (0.02 + 0.1 * smoothstep(0.0, 0.3, below_top))
+            * (0.5 + 1.0 * self.strata.fbm(x * 5.0, v * 12.0, 4));
         let face = smoothstep(0.0, 0.5 * self.pixel + 0.004, reach - face_depth);
         let shore = smoothstep(
             0.0,
             0.006,
             scale * 0.05 * (0.5 + self.strata.fbm(x * 14.0, 1.7, 3)) - above_base,
         );
-        let grass_free = smoothstep(0.005, 0.03, below_top);
-        let ledges = 0.45 + 0.55 * self.strata_pattern(u, v);
-        face.max(shore) * grass_free * ledges
+        let cliff = face.max(shore) * smoothstep(0.005, 0.03, below_top);
+        let ledge = self.strata_ledge(u, v)
+            * smoothstep(0.35, 0.6, self.strata.fbm(x * 9.0 + 3.0, v * 20.0, 3));
+        (cliff * (1.0 - 0.75 * ledge), cliff * ledge)
     }
 
     /// Density of the land's reflection in the sea at (u, v).

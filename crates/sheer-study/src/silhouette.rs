@@ -1,0 +1,123 @@
+//! The screen-space silhouette of the cloth: an orthographic camera looking along −z rasterises the
+//! triangles onto a coverage grid (a pixel is covered when its centre lies in a triangle), and two
+//! silhouettes differ by `1 − IoU` (the XOR area over the union area).
+//!
+//! This is the coverage silhouette seen by an orthographic camera, not the output of the GPU renderer
+//! (which another crate provides); it measures how much of the picture's outline a model change moves.
+
+use sheer_cloth::glam::DVec3;
+
+/// A square window of the x–y plane, m, rasterised at `resolution × resolution` pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Viewport {
+    pub min_x: f64,
+    pub min_y: f64,
+    /// Side of the square window, m.
+    pub size: f64,
+    pub resolution: usize,
+}
+
+impl Viewport {
+    /// A window around the default flag and everywhere it can wave (1.1 m × 0.8 m cloth whose top-left
+    /// corner is at (0, 0.8)): x from −0.4 to 1.6 m, y from −0.7 to 1.3 m.
+    pub fn around_flag(resolution: usize) -> Viewport {
+        Viewport {
+            min_x: -0.4,
+            min_y: -0.7,
+            size: 2.0,
+            resolution,
+        }
+    }
+}
+
+/// Coverage mask, row-major, `resolution²` entries.
+pub fn coverage(positions: &[DVec3], triangles: &[[u32; 3]], viewport: &Viewport) -> Vec<bool> {
+    let n = viewport.resolution;
+    let pixel = viewport.size / n as f64;
+    let mut mask = vec![false; n * n];
+    for tri in triangles {
+        let [a, b, c] = tri.map(|i| positions[i as usize]);
+        let edge =
+            |p: DVec3, q: DVec3, x: f64, y: f64| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+        let area = edge(a, b, c.x, c.y);
+        if area == 0.0 {
+            continue; // seen edge-on: covers no pixel centre
+        }
+        let to_pixel = |v: f64, min: f64| ((v - min) / pixel - 0.5).floor();
+        let clamp = |v: f64| v.clamp(0.0, n as f64 - 1.0) as usize;
+        let x0 = clamp(to_pixel(a.x.min(b.x).min(c.x), viewport.min_x));
+        let x1 = clamp(to_pixel(a.x.max(b.x).max(c.x), viewport.min_x) + 1.0);
+        let y0 = clamp(to_pixel(a.y.min(b.y).min(c.y), viewport.min_y));
+        let y1 = clamp(to_pixel(a.y.max(b.y).max(c.y), viewport.min_y) + 1.0);
+        for py in y0..=y1 {
+            let y = viewport.min_y + (py as f64 + 0.5) * pixel;
+            for px in x0..=x1 {
+                let x = viewport.min_x + (px as f64 + 0.5) * pixel;
+                // Inside when all three edge functions have the sign of the triangle's area (either
+                // winding: a folded flag shows its back).
+                let (e0, e1, e2) = (edge(a, b, x, y), edge(b, c, x, y), edge(c, a, x, y));
+                let inside = if area > 0.0 {
+                    e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0
+                } else {
+                    e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0
+                };
+                if inside {
+                    mask[py * n + px] = true;
+                }
+            }
+        }
+    }
+    mask
+}
+
+/// `1 − IoU` of two coverage masks: 0 for identical silhouettes, 1 for disjoint ones, 0 when both
+/// are empty.
+pub fn silhouette_difference(a: &[bool], b: &[bool]) -> f64 {
+    let (mut union, mut intersection) = (0usize, 0usize);
+    for (&x, &y) in a.iter().zip(b) {
+        union += (x || y) as usize;
+        intersection += (x && y) as usize;
+    }
+    if union == 0 {
+        0.0
+    } else {
+        1.0 - intersection as f64 / union as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(offset_x: f64) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let p = vec![
+            DVec3::new(offset_x, 0.0, 0.0),
+            DVec3::new(offset_x + 1.0, 0.0, 0.0),
+            DVec3::new(offset_x + 1.0, 1.0, 0.0),
+            DVec3::new(offset_x, 1.0, 0.0),
+        ];
+        (p, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    #[test]
+    fn shifted_square_differs_by_the_expected_fraction() {
+        let viewport = Viewport {
+            min_x: -1.0,
+            min_y: -1.0,
+            size: 4.0,
+            resolution: 200,
+        };
+        let (p, t) = square(0.0);
+        let (q, _) = square(0.5);
+        let a = coverage(&p, &t, &viewport);
+        assert_eq!(silhouette_difference(&a, &a), 0.0);
+        // Unit square covers 1 m² = 2500 pixels of 2 cm; shifted by half: intersection 0.5, union 1.5,
+        // 1 − IoU = 2/3. Pixel-centre sampling on a grid aligned with the square's edges is exact up
+        // to edges that fall on pixel centres: one column of 50 pixels, 2 % of the union.
+        let expected = 2.0 / 3.0;
+        let measured = silhouette_difference(&a, &coverage(&q, &t, &viewport));
+        assert!((measured - expected).abs() < 0.02, "{measured}");
+        let covered = a.iter().filter(|&&c| c).count();
+        assert!((covered as f64 - 2500.0).abs() <= 100.0, "{covered}");
+    }
+}

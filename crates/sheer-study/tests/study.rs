@@ -1,0 +1,286 @@
+//! Tests of the study's own machinery: the reference against an analytic answer, the error metrics,
+//! the stability boundary against linear stability analysis, the automatic choice, and a quick
+//! end-to-end run that writes every output file.
+
+use sheer_cloth::glam::DVec3;
+use sheer_cloth::{GridSpec, Method, SimParams, SpringParams};
+use sheer_study::chart::register_chart_font;
+use sheer_study::reference::reference;
+use sheer_study::stability::{
+    find_stability_boundary, omega_max_gershgorin, omega_max_power_iteration,
+};
+use sheer_study::{
+    Budget, ErrorMetrics, Monitor, Pinning, Row, Scene, StudyConfig, choose, simulate,
+    work_precision,
+};
+
+/// A free 6 × 4 cloth at rest under gravity, no air, no damping: every particle feels the same
+/// acceleration and the springs stay at rest length, so `x(t) = x₀ + ½ g t²` exactly.
+fn free_fall() -> Scene {
+    let mut params = SimParams::springs_only(
+        Method::Verlet { substeps: 1 },
+        SpringParams::new(1000.0, 0.0),
+    );
+    params.gravity = DVec3::new(0.0, -9.81, 0.0);
+    Scene {
+        name: "free_fall".into(),
+        grid: GridSpec {
+            columns: 6,
+            rows: 4,
+            ..GridSpec::default()
+        },
+        pinning: Pinning::Free,
+        params,
+        frame: 1.0 / 60.0,
+    }
+}
+
+#[test]
+fn reference_reproduces_free_fall() {
+    let scene = free_fall();
+    let time = 0.5;
+    let reference = reference(&scene, &[time], &Monitor::hidden()).unwrap();
+    let snapshot = reference.trajectory.at(time).unwrap();
+    let g = scene.params.gravity;
+    let rest = scene.model().unwrap().positions;
+    let analytic: Vec<DVec3> = rest.iter().map(|x| *x + 0.5 * g * time * time).collect();
+    let (rms, max) = sheer_study::position_errors(&snapshot.positions, &analytic).unwrap();
+    // Verlet is exact for constant acceleration; what remains is rounding: a few thousand sub-steps,
+    // each adding ~1e-16 relative to positions of order 1 m, so ~1e-12 m. 1e-10 m leaves margin.
+    assert!(max < 1e-10, "rms {rms:e}, max {max:e}");
+    // The fall drops 1.23 m; the reference must have moved (guards against comparing rest to rest).
+    assert!((snapshot.positions[0].y - rest[0].y + 0.5 * 9.81 * 0.25).abs() < 1e-10);
+    // The halving check agrees: both runs are exact up to rounding.
+    assert!(reference.halving[0].max_difference < 1e-10);
+}
+
+#[test]
+fn error_metrics_vanish_for_identical_runs_and_not_otherwise() {
+    let scene = Scene::hanging_sheet((8, 6)).unwrap();
+    let monitor = Monitor::hidden();
+    let times = [0.25];
+    let a = simulate(
+        &scene,
+        Method::SymplecticEuler { substeps: 50 },
+        scene.frame,
+        &times,
+        &monitor,
+    )
+    .unwrap();
+    let b = simulate(
+        &scene,
+        Method::SymplecticEuler { substeps: 50 },
+        scene.frame,
+        &times,
+        &monitor,
+    )
+    .unwrap();
+    let same = ErrorMetrics::at(&a, &b, 0.25).unwrap();
+    // The simulator is deterministic: identical runs give identical bits, so exactly zero.
+    assert_eq!(same.rms_position_error, Some(0.0));
+    assert_eq!(same.max_position_error, Some(0.0));
+    assert!(!same.diverged);
+    let c = simulate(
+        &scene,
+        Method::SymplecticEuler { substeps: 25 },
+        scene.frame,
+        &times,
+        &monitor,
+    )
+    .unwrap();
+    let different = ErrorMetrics::at(&c, &a, 0.25).unwrap();
+    assert!(different.rms_position_error.unwrap() > 0.0);
+    assert!(different.max_position_error.unwrap() >= different.rms_position_error.unwrap());
+    // A run that diverges is reported as diverged, with no error values (never NaN).
+    let stiff = Scene::stiff((8, 6)).unwrap();
+    let blown = simulate(
+        &stiff,
+        Method::ExplicitEuler { substeps: 10 },
+        stiff.frame,
+        &times,
+        &monitor,
+    )
+    .unwrap();
+    assert!(blown.diverged_at.is_some());
+    let metrics = ErrorMetrics::at(&blown, &a, 0.25).unwrap();
+    assert!(metrics.diverged && metrics.rms_position_error.is_none());
+}
+
+#[test]
+fn symplectic_euler_boundary_matches_linear_stability_analysis() {
+    let scene = Scene::undamped_sheet((8, 6), 1.0e4).unwrap();
+    let model = scene.model().unwrap();
+    let omega_power = omega_max_power_iteration(&model, &scene.params, 3000);
+    let omega_bound = omega_max_gershgorin(&model, &scene.params);
+    // Power iteration approaches ω_max from below; Gershgorin bounds it from above.
+    assert!(omega_power <= omega_bound * (1.0 + 1e-12));
+    let predicted = 2.0 / omega_power;
+    let duration = 0.5;
+    let found = find_stability_boundary(
+        &scene,
+        Method::SymplecticEuler { substeps: 1 },
+        0.5 * predicted,
+        1.5 * predicted,
+        duration,
+        12,
+        &Monitor::hidden(),
+    )
+    .unwrap();
+    // Rigorous side: linear analysis guarantees stability below 2/ω_bound.
+    assert!(
+        found >= 2.0 / omega_bound,
+        "{found:e} < {:e}",
+        2.0 / omega_bound
+    );
+    // Sharp side. Above the limit by a fraction δ, symplectic Euler's worst eigenvalue has modulus
+    // ≈ 1 + sqrt(8δ); growing from rounding (1e-16) to the divergence limit (strain 10) takes
+    // ln(1e17) ≈ 39 e-foldings, so over N = duration/dt ≈ 1100 steps anything with
+    // δ > (39/N)²/8 ≈ 1.6e-4 diverges. The bisection resolves ln(3)/2^12 ≈ 3e-4. The sagging sheet's
+    // tension (strain < 0.1 %) shifts ω by less than 0.1 %, and the power iteration underestimates
+    // ω_max by less than that. So the found step lies within 1 % of the prediction.
+    let ratio = found / predicted;
+    assert!(
+        (ratio - 1.0).abs() < 0.01,
+        "found {found:e}, predicted {predicted:e}"
+    );
+}
+
+fn row(method: Method, time: f64, rms: Option<f64>, cost: f64) -> Row {
+    Row {
+        scene: "flag".into(),
+        particles: 10,
+        method,
+        substep: 1e-3,
+        metrics: ErrorMetrics {
+            time,
+            rms_position_error: rms,
+            max_position_error: rms,
+            relative_energy_drift: rms.map(|_| 0.0),
+            reference_energy_drift: 0.0,
+            max_strain: rms.map(|_| 0.0),
+            diverged: rms.is_none(),
+        },
+        cpu_ms_per_simulated_second: cost,
+        reference_rms_halving: 0.0,
+    }
+}
+
+#[test]
+fn choice_is_the_cheapest_setting_within_budget() {
+    let rows = vec![
+        row(
+            Method::SmallStepsXpbd { substeps: 10 },
+            1.0,
+            Some(8e-3),
+            5.0,
+        ),
+        row(
+            Method::SmallStepsXpbd { substeps: 20 },
+            1.0,
+            Some(4e-3),
+            10.0,
+        ),
+        row(Method::Verlet { substeps: 100 }, 1.0, Some(1e-4), 50.0),
+        row(Method::ExplicitEuler { substeps: 10 }, 1.0, None, 1.0),
+        // Cheaper but measured at another time: not eligible.
+        row(
+            Method::Xpbd {
+                substeps: 1,
+                iterations: 5,
+            },
+            5.0,
+            Some(1e-3),
+            2.0,
+        ),
+    ];
+    let budget = Budget::default();
+    let choice = choose(&budget, &rows).unwrap();
+    assert_eq!(choice.method, Method::SmallStepsXpbd { substeps: 20 });
+    assert_eq!(choice.candidates, 2);
+    let strict = Budget {
+        max_rms_position_error: 1e-5,
+        ..budget
+    };
+    assert!(choose(&strict, &rows).is_none());
+}
+
+#[test]
+fn quick_sweep_against_a_converged_reference() {
+    let config = StudyConfig::quick();
+    let monitor = Monitor::hidden();
+    let scene = Scene::hanging_sheet(config.sweep_grid).unwrap();
+    let reference = reference(&scene, &config.sample_times, &monitor).unwrap();
+    // Converged: halving the reference's step moves it far less than the 5 mm budget the study
+    // judges against (an order of magnitude at least; measured ~1e-6 m).
+    for check in &reference.halving {
+        assert!(check.rms_difference < 5e-4, "{check:?}");
+    }
+    let rows = work_precision(&scene, &reference, &config.sweep(&scene), &monitor).unwrap();
+    assert_eq!(
+        rows.len(),
+        config.sweep(&scene).methods.len() * config.sample_times.len()
+    );
+    // First-order symplectic Euler converges: 4× the sub-steps gives a smaller error.
+    let error = |substeps: u32| {
+        rows.iter()
+            .find(|r| r.method == Method::SymplecticEuler { substeps } && r.metrics.time == 0.25)
+            .and_then(|r| r.metrics.rms_position_error)
+            .unwrap()
+    };
+    assert!(error(200) < error(50));
+    assert!(rows.iter().all(|r| r.cpu_ms_per_simulated_second >= 0.0));
+}
+
+#[test]
+fn quick_study_writes_every_output() {
+    if register_chart_font().is_err() {
+        // The charts need a TrueType font (fonts-dejavu-core); without one the study reports a typed
+        // error, which this checks instead of the files.
+        let out = std::env::temp_dir().join("sheer-study-no-font");
+        let result = sheer_study::cli::write_all(
+            &StudyConfig::quick(),
+            &Budget {
+                time: 0.25,
+                max_rms_position_error: 5e-3,
+            },
+            &out,
+            &Monitor::hidden(),
+        );
+        assert!(matches!(result, Err(sheer_study::StudyError::Font { .. })));
+        return;
+    }
+    let out = std::env::temp_dir().join(format!("sheer-study-quick-{}", std::process::id()));
+    sheer_study::cli::write_all(
+        &StudyConfig::quick(),
+        &Budget {
+            time: 0.25,
+            max_rms_position_error: 5e-3,
+        },
+        &out,
+        &Monitor::hidden(),
+    )
+    .unwrap();
+    for file in [
+        "work-precision.csv",
+        "work-precision.png",
+        "work-precision.md",
+        "stability-map.csv",
+        "stability-map.png",
+        "stability-map.md",
+        "ablation.csv",
+        "ablation.md",
+    ] {
+        let path = out.join(file);
+        let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+        assert!(size > 100, "{} missing or empty", path.display());
+    }
+    let csv = std::fs::read_to_string(out.join("work-precision.csv")).unwrap();
+    assert!(csv.starts_with("scene,particles,method,"));
+    for scene in ["flag", "hanging_sheet", "stiff", "default_flag"] {
+        assert!(
+            csv.lines().any(|l| l.starts_with(&format!("{scene},"))),
+            "{scene}"
+        );
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
