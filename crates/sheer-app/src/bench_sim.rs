@@ -68,7 +68,8 @@ pub fn stable_setting(name: &str) -> Option<Method> {
     })
 }
 
-const METHOD_NAMES: [&str; 7] = [
+/// Every method's name, as `Method::name` prints it, in the order tables and menus list them.
+pub const METHOD_NAMES: [&str; 7] = [
     "explicit_euler",
     "symplectic_euler",
     "verlet",

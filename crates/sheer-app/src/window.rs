@@ -318,15 +318,7 @@ impl SheerApp {
             egui::ComboBox::from_label("method")
                 .selected_text(current)
                 .show_ui(ui, |ui| {
-                    for name in [
-                        "explicit_euler",
-                        "symplectic_euler",
-                        "verlet",
-                        "implicit_euler",
-                        "pbd",
-                        "xpbd",
-                        "small_steps_xpbd",
-                    ] {
+                    for name in crate::bench_sim::METHOD_NAMES {
                         ui.selectable_value(&mut chosen, name, name);
                     }
                 });
