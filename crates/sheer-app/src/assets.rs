@@ -969,3 +969,286 @@ fn save_png(image: &RgbImage, path: &Path) -> Result<(), AssetError> {
             source,
         })
 }
+
+#[cfg(test)]
+mod tests {
+    //! The generators against the flag act's construction and the painting's composition; the committed files
+    //! against the generators.
+
+    use super::*;
+
+    const WORKSPACE_ASSETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets");
+
+    fn pixel(image: &RgbImage, x: u32, y: u32) -> [u8; 3] {
+        image.get_pixel(x, y).0
+    }
+
+    #[test]
+    fn flag_bands_fall_on_the_construction_units_at_50_px_per_unit() {
+        let flag = faroe_flag(1100).unwrap();
+        assert_eq!(flag.dimensions(), (1100, 800));
+        // Along the length, in the top white field's row 100: 6 | 1 | 2 | 1 | 12 units of 50 px.
+        let row = 100;
+        for (x, expected) in [
+            (0, FLAG_WHITE),
+            (299, FLAG_WHITE),
+            (300, FLAG_BLUE),
+            (349, FLAG_BLUE),
+            (350, FLAG_RED),
+            (449, FLAG_RED),
+            (450, FLAG_BLUE),
+            (499, FLAG_BLUE),
+            (500, FLAG_WHITE),
+            (1099, FLAG_WHITE),
+        ] {
+            assert_eq!(pixel(&flag, x, row), expected, "column {x}");
+        }
+        // Along the height, in the hoist's white column 100: 6 | 1 | 2 | 1 | 6 units of 50 px.
+        let column = 100;
+        for (y, expected) in [
+            (0, FLAG_WHITE),
+            (299, FLAG_WHITE),
+            (300, FLAG_BLUE),
+            (349, FLAG_BLUE),
+            (350, FLAG_RED),
+            (449, FLAG_RED),
+            (450, FLAG_BLUE),
+            (499, FLAG_BLUE),
+            (500, FLAG_WHITE),
+            (799, FLAG_WHITE),
+        ] {
+            assert_eq!(pixel(&flag, column, y), expected, "row {y}");
+        }
+        // Where the bands cross, red wins over blue and blue over white.
+        assert_eq!(pixel(&flag, 400, 400), FLAG_RED);
+        assert_eq!(pixel(&flag, 325, 325), FLAG_BLUE);
+        assert_eq!(pixel(&flag, 400, 325), FLAG_RED);
+    }
+
+    #[test]
+    fn flag_colour_areas_match_the_construction() {
+        // At 50 px per unit every pixel is a pure colour and the areas are exact: red = column + row − square.
+        let flag = faroe_flag(1100).unwrap();
+        let mut counts = [0usize; 3];
+        for p in flag.pixels() {
+            let index = [FLAG_WHITE, FLAG_BLUE, FLAG_RED]
+                .iter()
+                .position(|c| *c == p.0)
+                .unwrap_or_else(|| panic!("pixel {:?} is not a flag colour", p.0));
+            counts[index] += 1;
+        }
+        let red = 100 * 800 + 100 * 1100 - 100 * 100;
+        let cross = 200 * 800 + 200 * 1100 - 200 * 200;
+        assert_eq!(counts, [1100 * 800 - cross, cross - red, red]);
+    }
+
+    #[test]
+    fn flag_proportions_are_8_to_11() {
+        assert_eq!(flag_height(11), 8);
+        assert_eq!(flag_height(1100), 800);
+        for width in 22..3000u32 {
+            let height = flag_height(width);
+            let exact = f64::from(width) * 8.0 / 11.0;
+            assert!(
+                (f64::from(height) - exact).abs() <= 0.5,
+                "width {width}: height {height}, 8/11 of it {exact}"
+            );
+        }
+    }
+
+    #[test]
+    fn flag_narrower_than_its_22_units_is_refused() {
+        assert!(matches!(
+            faroe_flag(21),
+            Err(AssetError::FlagTooNarrow { width: 21 })
+        ));
+        assert!(matches!(
+            faroe_flag(0),
+            Err(AssetError::FlagTooNarrow { width: 0 })
+        ));
+        assert_eq!(faroe_flag(22).unwrap().dimensions(), (22, 16));
+        assert!(matches!(
+            faroe_flag(u32::MAX),
+            Err(AssetError::ImageTooLarge { .. })
+        ));
+    }
+
+    #[test]
+    fn anti_aliased_flag_keeps_each_colours_area() {
+        // At 37 px (not a multiple of 22) edge pixels mix colours by area in linear light, so the image's mean
+        // linear colour equals the area-weighted mean of the three colours up to 8-bit rounding: ≤ 0.5/255 in
+        // sRGB, times the sRGB decoding's steepest slope, 2.4/1.055 ≈ 2.3, so ≤ 1.2/255 in linear light.
+        let width = 37;
+        let flag = faroe_flag(width).unwrap();
+        let height = flag.height();
+        let (w, h) = (f64::from(width), f64::from(height));
+        let units_x = 22.0 / w;
+        let units_y = 16.0 / h;
+        // Exact areas in the image's own (rounded-height) frame, in construction units scaled to pixels.
+        let (red_x, cross_x) = (2.0 / units_x, 4.0 / units_x);
+        let (red_y, cross_y) = (2.0 / units_y, 4.0 / units_y);
+        let red = red_x * h + red_y * w - red_x * red_y;
+        let cross = cross_x * h + cross_y * w - cross_x * cross_y;
+        let area = w * h;
+        let expected: [f64; 3] = std::array::from_fn(|c| {
+            ((area - cross) * srgb8_to_linear(FLAG_WHITE)[c]
+                + (cross - red) * srgb8_to_linear(FLAG_BLUE)[c]
+                + red * srgb8_to_linear(FLAG_RED)[c])
+                / area
+        });
+        let mut mean = [0.0; 3];
+        for p in flag.pixels() {
+            let linear = srgb8_to_linear(p.0);
+            for c in 0..3 {
+                mean[c] += linear[c] / area;
+            }
+        }
+        for c in 0..3 {
+            assert!(
+                (mean[c] - expected[c]).abs() < 2.0 / 255.0,
+                "channel {c}: mean {} expected {}",
+                mean[c],
+                expected[c]
+            );
+        }
+        // And some pixels are genuinely mixed (the edges are anti-aliased, not snapped).
+        let pure = [FLAG_WHITE, FLAG_BLUE, FLAG_RED];
+        assert!(flag.pixels().any(|p| !pure.contains(&p.0)));
+    }
+
+    /// Mean sRGB colour of a `size`-px square around (u, v).
+    fn patch_mean(image: &RgbImage, u: f64, v: f64, size: u32) -> [f64; 3] {
+        let (cx, cy) = (
+            (u * f64::from(image.width())) as u32,
+            (v * f64::from(image.height())) as u32,
+        );
+        let mut sum = [0.0; 3];
+        let mut n = 0.0;
+        for y in cy - size / 2..cy + size / 2 {
+            for x in cx - size / 2..cx + size / 2 {
+                let p = pixel(image, x, y);
+                for c in 0..3 {
+                    sum[c] += f64::from(p[c]);
+                }
+                n += 1.0;
+            }
+        }
+        sum.map(|s| s / n)
+    }
+
+    fn luminance_spread(image: &RgbImage, u: f64, v: f64, size: u32) -> f64 {
+        let (cx, cy) = (
+            (u * f64::from(image.width())) as u32,
+            (v * f64::from(image.height())) as u32,
+        );
+        let values: Vec<f64> = (cy - size / 2..cy + size / 2)
+            .flat_map(|y| (cx - size / 2..cx + size / 2).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let p = pixel(image, x, y);
+                0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+            })
+            .collect();
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        (values.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / values.len() as f64).sqrt()
+    }
+
+    #[test]
+    fn landscape_has_sky_cliffs_sea_and_paper_where_the_composition_puts_them() {
+        let painting = faroe_landscape(512, 512, LANDSCAPE_ASSET_SEED).unwrap();
+        let sky = patch_mean(&painting, 0.5, 0.08, 24);
+        let headland = patch_mean(&painting, 0.15, 0.5, 24);
+        let sea = patch_mean(&painting, 0.5, 0.85, 24);
+        let paper = patch_mean(&painting, 0.5, 0.004, 2);
+        assert!(sky[2] > sky[0] + 30.0 && sky[2] > sky[1], "sky {sky:?}");
+        assert!(
+            headland[1] > headland[0] && headland[1] > headland[2] + 20.0,
+            "headland {headland:?}"
+        );
+        assert!(sea[2] > sea[0] + 30.0, "sea {sea:?}");
+        let brightness = |c: [f64; 3]| c.iter().sum::<f64>();
+        assert!(brightness(sea) < brightness(sky), "sea {sea:?} sky {sky:?}");
+        assert!(paper.iter().all(|&c| c > 220.0), "paper margin {paper:?}");
+    }
+
+    #[test]
+    fn landscape_washes_are_painterly_not_flat() {
+        // A flat fill has zero spread; granulation, brush strokes and paper grain give every wash texture.
+        let painting = faroe_landscape(512, 512, LANDSCAPE_ASSET_SEED).unwrap();
+        for (name, u, v) in [("sky", 0.5, 0.08), ("headland", 0.15, 0.5), ("sea", 0.5, 0.85)] {
+            let spread = luminance_spread(&painting, u, v, 32);
+            assert!(spread > 2.0, "{name}: luminance spread {spread:.2} of 255");
+        }
+    }
+
+    #[test]
+    fn landscape_is_a_pure_function_of_size_and_seed_whatever_the_thread_count() {
+        let one_thread = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| faroe_landscape(200, 150, 7).unwrap());
+        let three_threads = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap()
+            .install(|| faroe_landscape(200, 150, 7).unwrap());
+        assert!(one_thread == three_threads, "thread count changed the painting");
+        let other_seed = faroe_landscape(200, 150, 8).unwrap();
+        let differing = one_thread
+            .pixels()
+            .zip(other_seed.pixels())
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            differing > 200 * 150 / 2,
+            "another seed changed only {differing} of {} pixels",
+            200 * 150
+        );
+    }
+
+    #[test]
+    fn landscape_of_zero_or_huge_size_is_refused() {
+        assert!(matches!(
+            faroe_landscape(0, 10, 1),
+            Err(AssetError::EmptyImage { .. })
+        ));
+        assert!(matches!(
+            faroe_landscape(10, 0, 1),
+            Err(AssetError::EmptyImage { .. })
+        ));
+        assert!(matches!(
+            faroe_landscape(100_000, 100_000, 1),
+            Err(AssetError::ImageTooLarge { .. })
+        ));
+    }
+
+    #[test]
+    fn committed_assets_are_what_the_generators_make() {
+        let load = |name: &str| {
+            image::open(Path::new(WORKSPACE_ASSETS).join(name))
+                .unwrap_or_else(|e| panic!("assets/{name}: {e}"))
+                .to_rgb8()
+        };
+        // Compared with `==`, not `assert_eq!`, so that a failure does not print megabytes of pixels.
+        assert!(
+            load(FLAG_FILE_NAME) == faroe_flag(FLAG_ASSET_SIZE.0).unwrap(),
+            "assets/{FLAG_FILE_NAME} is stale: run `sheer assets --out assets`"
+        );
+        let (width, height) = LANDSCAPE_ASSET_SIZE;
+        assert!(
+            load(LANDSCAPE_FILE_NAME)
+                == faroe_landscape(width, height, LANDSCAPE_ASSET_SEED).unwrap(),
+            "assets/{LANDSCAPE_FILE_NAME} is stale: run `sheer assets --out assets`"
+        );
+    }
+
+    #[test]
+    fn write_assets_reports_an_unwritable_folder() {
+        // A folder cannot be created below a regular file.
+        let file = std::env::temp_dir().join(format!("sheer-assets-test-{}", std::process::id()));
+        std::fs::write(&file, b"not a folder").unwrap();
+        let result = write_assets(&file.join("inside"));
+        std::fs::remove_file(&file).unwrap();
+        assert!(matches!(result, Err(AssetError::CreateDir { .. })), "{result:?}");
+    }
+}
