@@ -1,6 +1,8 @@
 // thin_slab.wgsl — the thin-slab shading model of Frisvad, Christensen & Falster (2005), eqs. (4)–(9),
-// for sheer-slab's headless renderer (crates/sheer-slab/src/render.rs), plus the traditional baseline
-// (diffuse BRDF, constant alpha 0.2) and the background pass.
+// for sheer-slab's headless renderer (crates/sheer-slab/src/render/mod.rs), plus the traditional baseline
+// (diffuse BRDF, constant alpha 0.2) and the background pass. With the override `all_orders`, the
+// diffuse radiance also carries the multiply-scattered part of an isotropically scattering slab, looked
+// up in the table sheer-transport precomputes (assets/all_orders_table.bin; layout in render/mod.rs).
 //
 // The Rust side prepends, in this order: one of `slab_output_single.wgsl` / `slab_output_dual.wgsl`
 // (which declare `SlabOutput` and `slab_output`, and for dual-source blending the `enable` directive that
@@ -35,6 +37,21 @@ struct Frame {
 @group(0) @binding(2) var thickness_texture: texture_2d<f32>;
 @group(0) @binding(3) var linear_sampler: sampler;
 @group(0) @binding(4) var background_texture: texture_2d<f32>;
+// The all-orders table (render/mod.rs): texel (a·C + j, (face·T + t)·C + k) holds ln f = ln(L_m/(Λ²μ0))
+// at the (μ0, μ) nodes (k, j), (k, j+1), (k+1, j), (k+1, j+1) of τ1 node t, albedo node a.
+@group(0) @binding(5) var all_orders_table: texture_2d<f32>;
+// Texel (t, 0): the albedo warps (e^β − 1, 1/β) of τ1 nodes t (xy) and t + 1 (zw).
+@group(0) @binding(6) var all_orders_warp: texture_2d<f32>;
+
+struct AllOrdersAxes {
+    // x: c0 = ln τmin + τmin; y: 1/(c1 − c0) (τ1 nodes are uniform in c = ln τ1 + τ1); z: τ1 cells;
+    // w: albedo cells.
+    tau: vec4<f32>,
+    // x: cosine cells C (μ0 and μ nodes are uniform in √μ); y: texture rows per face.
+    cosine: vec4<f32>,
+}
+
+@group(0) @binding(7) var<uniform> all_orders_axes: AllOrdersAxes;
 
 const PI: f32 = 3.14159265358979;
 // Cosines below this are treated as this (grazing guard): WGSL may assume no infinities at run time, so
@@ -45,6 +62,8 @@ const COSINE_FLOOR: f32 = 1e-6;
 override per_channel_thickness: bool = false;
 // Set per pipeline: true when a thickness texture multiplies τ1.
 override has_thickness_texture: bool = false;
+// Set per pipeline: true for the all-orders model (single scattering + the table's multiple part).
+override all_orders: bool = false;
 
 // φ(d) = (1 − e^{−d})/d = Σ (−d)^k/(k+1)! for 0 ≤ d ≤ 1/2, by Horner with the coefficients
 // (−1)^k/(k+1)! (multiplications only: divisions by constants stay divisions without fast-math); stopping
@@ -91,15 +110,110 @@ fn slab_shapes(tau: f32, mu0: f32, mu: f32) -> vec3<f32> {
     return vec3<f32>(reflected, transmitted, alpha);
 }
 
+// ---- the all-orders table lookup: the CPU sampler of sheer-transport (table.rs) in f32 -----------------
+
+// Position on a uniform axis of `cells` cells over [0, 1]: (lower node, weight), the last cell taking
+// unit = 1 with weight 1, as the CPU's `axis_position`.
+fn all_orders_axis(unit: f32, cells: f32) -> vec2<f32> {
+    let scaled = unit * cells;
+    let lower = min(floor(scaled), cells - 1.0);
+    return vec2<f32>(lower, scaled - lower);
+}
+
+// ln(1 + x) for x ≥ 0 without the rounding of 1 + x for small x: 2·atanh(u), u = x/(2 + x) ≤ 1/5 for
+// x < 1/2, by its series to u⁹ (truncation < 2·u¹¹/11 ≤ 4e-9 relative); log(1 + x) above.
+fn all_orders_log_one_plus(x: f32) -> f32 {
+    let u = x / (2.0 + x);
+    let u2 = u * u;
+    let series = 2.0 * u * (1.0 + u2 * (0.333333333 + u2 * (0.2 + u2 * (0.142857143 + u2 * 0.111111111))));
+    return select(log(1.0 + x), series, x < 0.5);
+}
+
+struct AllOrdersTau {
+    // Lower τ1 node and the weight of the upper one.
+    node: vec2<f32>,
+    // Albedo warps (e^β − 1, 1/β) of the lower (xy) and the upper (zw) τ1 node.
+    warps: vec4<f32>,
+}
+
+fn all_orders_tau(tau: f32) -> AllOrdersTau {
+    // The clamp only absorbs rounding: the renderer validates τ1 against the table's range.
+    let unit = clamp((log(tau) + tau - all_orders_axes.tau.x) * all_orders_axes.tau.y, 0.0, 1.0);
+    let node = all_orders_axis(unit, all_orders_axes.tau.z);
+    return AllOrdersTau(node, textureLoad(all_orders_warp, vec2<i32>(i32(node.x), 0), 0));
+}
+
+struct AllOrdersCosines {
+    // Texel offset of the (μ0, μ) cell: (j, face rows + k).
+    texel: vec2<i32>,
+    // Bilinear weights of the cell's four nodes, in the texel's channel order.
+    weights: vec4<f32>,
+}
+
+fn all_orders_cosines(mu0: f32, mu: f32, eye_on_lit_side: bool) -> AllOrdersCosines {
+    let cells = all_orders_axes.cosine.x;
+    // min(): normalised dot products may exceed 1 by rounding.
+    let k = all_orders_axis(sqrt(min(mu0, 1.0)), cells);
+    let j = all_orders_axis(sqrt(min(mu, 1.0)), cells);
+    let face_rows = select(all_orders_axes.cosine.y, 0.0, eye_on_lit_side);
+    let weights = vec4<f32>(1.0 - k.y, 1.0 - k.y, k.y, k.y) * vec4<f32>(1.0 - j.y, j.y, 1.0 - j.y, j.y);
+    return AllOrdersCosines(vec2<i32>(i32(j.x), i32(face_rows + k.x)), weights);
+}
+
+// Albedo node and weight at τ1 node with warp (e^β − 1, 1/β), s = √(1−Λ): w = ln(1 + s(e^β − 1))/β.
+fn all_orders_albedo_axis(s: f32, warp: vec2<f32>) -> vec2<f32> {
+    return all_orders_axis(clamp(all_orders_log_one_plus(s * warp.x) * warp.y, 0.0, 1.0),
+        all_orders_axes.tau.w);
+}
+
+// ln f interpolated quadrilinearly (four texel loads, each a whole (μ0, μ) cell).
+fn all_orders_log_value(tau: AllOrdersTau, albedo: f32, cosines: AllOrdersCosines) -> f32 {
+    // max(): Λ from half-float texels times the scale may exceed 1 by rounding.
+    let s = sqrt(max(1.0 - albedo, 0.0));
+    let lower = all_orders_albedo_axis(s, tau.warps.xy);
+    let upper = all_orders_albedo_axis(s, tau.warps.zw);
+    let cells = i32(all_orders_axes.cosine.x);
+    let row_lower = cosines.texel.y + i32(tau.node.x) * cells;
+    let column_lower = cosines.texel.x + i32(lower.x) * cells;
+    let column_upper = cosines.texel.x + i32(upper.x) * cells;
+    let w = cosines.weights;
+    let at_lower = mix(dot(textureLoad(all_orders_table, vec2<i32>(column_lower, row_lower), 0), w),
+        dot(textureLoad(all_orders_table, vec2<i32>(column_lower + cells, row_lower), 0), w), lower.y);
+    let at_upper = mix(dot(textureLoad(all_orders_table, vec2<i32>(column_upper, row_lower + cells), 0), w),
+        dot(textureLoad(all_orders_table, vec2<i32>(column_upper + cells, row_lower + cells), 0), w),
+        upper.y);
+    return mix(at_lower, at_upper, tau.node.y);
+}
+
+// The multiply-scattered radiance per unit albedo and unit irradiance normal to the beam,
+// L_m/Λ = Λ·μ0·e^{ln f} (sr⁻¹), per channel; τ1 grey unless `per_channel_thickness`.
+fn all_orders_multiple_per_albedo(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu: f32,
+        eye_on_lit_side: bool) -> vec3<f32> {
+    let cosines = all_orders_cosines(mu0, mu, eye_on_lit_side);
+    var log_value: vec3<f32>;
+    if per_channel_thickness {
+        log_value = vec3<f32>(all_orders_log_value(all_orders_tau(tau.r), albedo.r, cosines),
+            all_orders_log_value(all_orders_tau(tau.g), albedo.g, cosines),
+            all_orders_log_value(all_orders_tau(tau.b), albedo.b, cosines));
+    } else {
+        let grey = all_orders_tau(tau.r);
+        log_value = vec3<f32>(all_orders_log_value(grey, albedo.r, cosines),
+            all_orders_log_value(grey, albedo.g, cosines), all_orders_log_value(grey, albedo.b, cosines));
+    }
+    return albedo * (mu0 * exp(log_value));
+}
+
 struct SlabValues {
-    // L± per unit albedo (W/(m²·sr)): the single-scattered radiance for Λ = 1.
+    // L/Λ (W/(m²·sr)): the single-scattered radiance for Λ = 1, plus with `all_orders` the multiple part
+    // per unit albedo for the given Λ.
     radiance_per_albedo: vec3<f32>,
     // α = e^{−τ1/μ} per channel.
     transmittance: vec3<f32>,
 }
 
-// The model at one point: lit-side rule, point-light irradiance, eqs. (4)/(5) per channel and α.
-fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>) -> SlabValues {
+// The model at one point: lit-side rule, point-light irradiance, eqs. (4)/(5) per channel and α; with
+// `all_orders` plus the table's multiple part, for which `albedo` (Λ per channel) is needed.
+fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>) -> SlabValues {
     let to_light = frame.light.xyz - position;
     let side = lit_side_cosines(normal, to_light, frame.eye.xyz - position);
     let mu = max(side.mu, COSINE_FLOOR);
@@ -126,7 +240,11 @@ fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>) -> SlabVa
         transmittance = vec3<f32>(grey.z);
     }
     let shape = select(transmitted, reflected, side.eye_on_lit_side);
-    return SlabValues(shape * (irradiance / (4.0 * PI)), transmittance);
+    var radiance = shape * (irradiance / (4.0 * PI));
+    if all_orders {
+        radiance += all_orders_multiple_per_albedo(tau, albedo, mu0, mu, side.eye_on_lit_side) * irradiance;
+    }
+    return SlabValues(radiance, transmittance);
 }
 
 // τ1 per channel at uv; the thickness texture is only sampled when present (fixed per pipeline).
@@ -147,6 +265,14 @@ fn optical_thickness_at_vertex(uv: vec2<f32>) -> vec3<f32> {
 
 fn albedo_at(uv: vec2<f32>) -> vec3<f32> {
     return frame.albedo_scale.rgb * textureSample(albedo_texture, linear_sampler, uv).rgb;
+}
+
+// Λ at a vertex, needed there only by the all-orders model (its multiple part is not linear in Λ).
+fn albedo_at_vertex(uv: vec2<f32>) -> vec3<f32> {
+    if all_orders {
+        return frame.albedo_scale.rgb * textureSampleLevel(albedo_texture, linear_sampler, uv, 0.0).rgb;
+    }
+    return vec3<f32>(1.0);
 }
 
 struct VertexInput {
@@ -173,8 +299,9 @@ fn vs_per_fragment(input: VertexInput) -> FragmentPathVarying {
 @fragment
 fn fs_per_fragment(input: FragmentPathVarying) -> SlabOutput {
     let tau = optical_thickness_at(input.uv);
-    let values = slab_values(input.world_position, input.normal, tau);
-    return slab_output(albedo_at(input.uv) * values.radiance_per_albedo, values.transmittance);
+    let albedo = albedo_at(input.uv);
+    let values = slab_values(input.world_position, input.normal, tau, albedo);
+    return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
 }
 
 // ---- per vertex (vertex shader) and on the CPU (per vertex, uploaded) ---------------------------------
@@ -189,7 +316,7 @@ struct InterpolatedVarying {
 @vertex
 fn vs_per_vertex(input: VertexInput) -> InterpolatedVarying {
     let tau = optical_thickness_at_vertex(input.uv);
-    let values = slab_values(input.position, input.normal, tau);
+    let values = slab_values(input.position, input.normal, tau, albedo_at_vertex(input.uv));
     return InterpolatedVarying(frame.view_projection * vec4<f32>(input.position, 1.0),
         values.radiance_per_albedo, values.transmittance, input.uv);
 }
@@ -208,7 +335,8 @@ fn vs_cpu(input: CpuVertexInput) -> InterpolatedVarying {
         input.radiance_per_albedo, input.transmittance, input.uv);
 }
 
-// Λ enters eqs. (4)–(5) linearly, so the albedo texture is applied per fragment in both per-vertex paths.
+// Λ enters eqs. (4)–(5) linearly, so the albedo texture is applied per fragment in both per-vertex paths
+// (all orders: the multiple part per unit albedo was evaluated with the vertex's Λ).
 @fragment
 fn fs_interpolated(input: InterpolatedVarying) -> SlabOutput {
     return slab_output(albedo_at(input.uv) * input.radiance_per_albedo, input.transmittance);

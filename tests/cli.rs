@@ -180,3 +180,235 @@ fn bad_scene_files_are_one_line_errors_naming_the_problem() {
             .contains("cannot read scene")
     );
 }
+
+#[test]
+fn study_choose_quick_writes_the_choice_and_its_sweep() {
+    // The quick study (12 × 9 flag, coverage over 0.25–0.5 s) end to end through the binary: a few
+    // seconds. A generous coverage budget so some setting meets it and the choice file is written.
+    let dir = std::env::temp_dir().join(format!("sheer-study-{}", std::process::id()));
+    let out = sheer(&[
+        "study",
+        "choose",
+        "--quick",
+        "--max-coverage-difference",
+        "10",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let choice = std::fs::read_to_string(dir.join("choice.toml")).unwrap();
+    let table: toml::Table = toml::from_str(&choice).unwrap();
+    assert_eq!(table["quick"].as_bool(), Some(true));
+    assert_eq!(table["budget"]["kind"].as_str(), Some("coverage"));
+    assert_eq!(table["budget"]["max"].as_float(), Some(10.0));
+    let method = table["choice"]["method"].as_str().unwrap();
+    assert!(
+        sheer_cloth::Method::NAMES.contains(&method),
+        "unknown method {method}"
+    );
+    assert!(
+        table["choice"]["cpu_ms_per_simulated_second"]
+            .as_float()
+            .unwrap()
+            > 0.0
+    );
+    assert_eq!(
+        table["scene"]["simulation"]["method"]["kind"].as_str(),
+        Some(method)
+    );
+    // The sweep behind it: every row of the default flag in the CSV, with its coverage difference.
+    let csv = std::fs::read_to_string(dir.join("work-precision.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let coverage = header
+        .iter()
+        .position(|c| *c == "coverage_difference")
+        .unwrap();
+    let rows: Vec<&str> = csv
+        .lines()
+        .filter(|l| l.starts_with("default_flag,"))
+        .collect();
+    assert!(rows.len() > 10, "{csv}");
+    assert!(rows.iter().any(|r| {
+        r.split(',')
+            .nth(coverage)
+            .and_then(|v| v.parse::<f64>().ok())
+            .is_some_and(|v| v > 0.0)
+    }));
+    let md = std::fs::read_to_string(dir.join("work-precision.md")).unwrap();
+    assert!(md.contains("## Budget, choice and why"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn study_help_and_bad_budgets() {
+    let help = sheer(&["study", "--help"]);
+    assert!(help.status.success());
+    let text = String::from_utf8(help.stdout).unwrap();
+    for command in ["work-precision", "stability", "ablation", "choose", "all"] {
+        assert!(text.contains(command), "{text}");
+    }
+    for args in [
+        &["study", "choose", "--quick", "--max-coverage-difference=-1"][..],
+        &[
+            "study",
+            "choose",
+            "--quick",
+            "--max-coverage-difference",
+            "NaN",
+        ],
+        &["study", "choose", "--budget", "rms", "--budget-mm", "0"],
+        &["study", "choose", "--budget", "rms", "--at", "0.3"],
+    ] {
+        let out = sheer(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+    }
+}
+
+/// Parses `sheer slab` output: the rows after the header, as numbers.
+fn slab_rows(out: &std::process::Output) -> Vec<Vec<f64>> {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("tau1,albedo,mu0,mu,alpha,l_plus,l_minus")
+    );
+    lines
+        .map(|line| line.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn slab_all_orders_matches_the_solver_within_the_tables_error() {
+    let dir = std::env::temp_dir().join(format!("sheer-slab-all-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = dir.join("rows.csv");
+    let rows = [
+        [2.0, 1.0, 0.5, 0.5],
+        [0.5, 0.9, 1.0, 0.3],
+        [7.0, 0.97, 0.2, 0.8],
+    ];
+    let text: String = rows
+        .iter()
+        .map(|r| format!("{},{},{},{}\n", r[0], r[1], r[2], r[3]))
+        .collect();
+    std::fs::write(&input, format!("tau1,albedo,mu0,mu\n{text}")).unwrap();
+    let path = input.to_str().unwrap();
+    let single = slab_rows(&sheer(&["slab", path]));
+    let all = slab_rows(&sheer(&["slab", "--model", "all-orders", path]));
+    let explicit_single = slab_rows(&sheer(&["slab", "--model", "single", path]));
+    assert_eq!(single, explicit_single);
+    assert_eq!(all.len(), rows.len());
+    for ((row, single), all) in rows.iter().zip(&single).zip(&all) {
+        let [tau, albedo, mu0, mu] = *row;
+        assert_eq!(&all[..5], &single[..5], "inputs and alpha are the model's");
+        // Against the all-orders solver: within the table's stated interpolation error (sheer-transport
+        // README: 4.3e-3 reflected, 3.2e-2 transmitted, rounded up as its tests do).
+        let solution = sheer_transport::SlabSolver::new(tau, albedo)
+            .unwrap()
+            .solve(mu0)
+            .unwrap();
+        let reflected = solution.reflected_radiance(mu).unwrap();
+        let transmitted = solution.transmitted_radiance(mu).unwrap();
+        assert!(
+            ((all[5] - reflected) / reflected).abs() < 5e-3,
+            "{row:?}: {} vs {reflected}",
+            all[5]
+        );
+        assert!(
+            ((all[6] - transmitted) / transmitted).abs() < 3.5e-2,
+            "{row:?}: {} vs {transmitted}",
+            all[6]
+        );
+        // Multiple scattering adds light on both faces, noticeably at these optical thicknesses.
+        assert!(
+            all[5] > 1.05 * single[5] && all[6] > 1.05 * single[6],
+            "{row:?}"
+        );
+    }
+    // The paper-literal convention multiplies the whole diffuse radiance by μ0 (0.5 is exact).
+    let literal = slab_rows(&sheer(&[
+        "slab",
+        "--model",
+        "all-orders",
+        "--paper-literal",
+        path,
+    ]));
+    assert_eq!(literal[0][5], all[0][5] * 0.5);
+    assert_eq!(literal[0][6], all[0][6] * 0.5);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn slab_refuses_a_bad_model_a_bad_table_and_rows_outside_the_table() {
+    let dir = std::env::temp_dir().join(format!("sheer-slab-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = dir.join("rows.csv");
+    std::fs::write(&input, "2,1,0.5,0.5\n").unwrap();
+    let path = input.to_str().unwrap();
+    let one_line = |out: &std::process::Output, status: i32, needles: &[&str]| {
+        assert_eq!(out.status.code(), Some(status), "{needles:?}");
+        let stderr = String::from_utf8(out.stderr.clone()).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        for needle in needles {
+            assert!(stderr.contains(needle), "{needle}: {stderr}");
+        }
+    };
+    // A usage error (clap's status 2), naming the value and the choices.
+    one_line(
+        &sheer(&["slab", "--model", "double", path]),
+        2,
+        &["double", "single", "all-orders"],
+    );
+    let missing = dir.join("missing.bin");
+    one_line(
+        &sheer(&[
+            "slab",
+            "--model",
+            "all-orders",
+            "--table",
+            missing.to_str().unwrap(),
+            path,
+        ]),
+        1,
+        &["cannot read the all-orders table", "missing.bin"],
+    );
+    let corrupt = dir.join("corrupt.bin");
+    std::fs::write(&corrupt, b"SHEERAOT but not really").unwrap();
+    one_line(
+        &sheer(&[
+            "slab",
+            "--model",
+            "all-orders",
+            "--table",
+            corrupt.to_str().unwrap(),
+            path,
+        ]),
+        1,
+        &["not a valid all-orders table"],
+    );
+    one_line(
+        &sheer(&["slab", "--table", corrupt.to_str().unwrap(), path]),
+        1,
+        &["--table", "all-orders"],
+    );
+    // τ1 outside the table is a bad row, named by its line, not a silent clamp.
+    std::fs::write(&input, "2,1,0.5,0.5\n20,1,0.5,0.5\n").unwrap();
+    one_line(
+        &sheer(&["slab", "--model", "all-orders", path]),
+        1,
+        &["row 2", "tau1 = 20", "[0.01, 10]"],
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -22,12 +22,51 @@ fn the_window_runs_frames_and_saves_a_screenshot_of_panel_and_flag() {
         .to_rgb8();
     let (w, h) = image.dimensions();
     assert!(w >= 800 && h >= 500, "window is {w}×{h}");
-    // The side panel: the left 200 px hold text (light pixels) on egui's dark panel.
-    let panel_text = (0..200.min(w))
+    // The side panel, in egui's dark theme (colours measured on a screenshot: `xvfb-run -a -s
+    // "-screen 0 1280x800x24" target/release/sheer --frames 30 --screenshot w.png`). Light pixels
+    // alone would not do: the painting's paper border is light too, and without the panel the
+    // centred frame leaves the same grey as the panel on either side. So the panel is: mostly the
+    // panel grey (27) on the left, the near-black (10) of its text fields, the blue (0, 92, 128) of
+    // its selected toggles, light text, and its right edge, a full-height line of grey 60.
+    let near = |x: u32, y: u32, colour: [u8; 3], tolerance: u8| {
+        let p = image.get_pixel(x, y).0;
+        (0..3).all(|c| p[c].abs_diff(colour[c]) <= tolerance)
+    };
+    let left: Vec<(u32, u32)> = (0..200.min(w))
         .flat_map(|x| (0..h).map(move |y| (x, y)))
-        .filter(|&(x, y)| image.get_pixel(x, y).0.iter().all(|&c| c > 160))
+        .collect();
+    let count = |colour: [u8; 3], tolerance: u8| {
+        left.iter()
+            .filter(|&&(x, y)| near(x, y, colour, tolerance))
+            .count()
+    };
+    let fill = count([27; 3], 3);
+    assert!(
+        fill > left.len() / 2,
+        "the left 200 px are not the panel's grey: {fill} of {}",
+        left.len()
+    );
+    let fields = count([10; 3], 3);
+    assert!(
+        fields > 1000,
+        "no text fields in the panel: {fields} pixels"
+    );
+    let toggles = count([0, 92, 128], 10);
+    assert!(
+        toggles > 500,
+        "no selected toggles in the panel: {toggles} pixels"
+    );
+    let panel_text = left
+        .iter()
+        .filter(|&&(x, y)| image.get_pixel(x, y).0.iter().all(|&c| c > 160))
         .count();
     assert!(panel_text > 500, "no panel text: {panel_text} light pixels");
+    let edge = (100..w / 2)
+        .find(|&x| (0..h).filter(|&y| near(x, y, [60; 3], 3)).count() > h as usize * 9 / 10);
+    assert!(
+        edge.is_some(),
+        "no panel edge in the left half of the window"
+    );
     // The flag: the Faroe flag's red cross appears right of the panel (nothing else in the scene is
     // red: the painting is sky, sea and green cliffs). It is dim where the flag is back- or side-lit,
     // so "red" means clearly redder than green and blue, not bright.

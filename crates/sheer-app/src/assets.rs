@@ -1174,7 +1174,11 @@ mod tests {
     fn landscape_washes_are_painterly_not_flat() {
         // A flat fill has zero spread; granulation, brush strokes and paper grain give every wash texture.
         let painting = faroe_landscape(512, 512, LANDSCAPE_ASSET_SEED).unwrap();
-        for (name, u, v) in [("sky", 0.5, 0.08), ("headland", 0.15, 0.5), ("sea", 0.5, 0.85)] {
+        for (name, u, v) in [
+            ("sky", 0.5, 0.08),
+            ("headland", 0.15, 0.5),
+            ("sea", 0.5, 0.85),
+        ] {
             let spread = luminance_spread(&painting, u, v, 32);
             assert!(spread > 2.0, "{name}: luminance spread {spread:.2} of 255");
         }
@@ -1192,7 +1196,10 @@ mod tests {
             .build()
             .unwrap()
             .install(|| faroe_landscape(200, 150, 7).unwrap());
-        assert!(one_thread == three_threads, "thread count changed the painting");
+        assert!(
+            one_thread == three_threads,
+            "thread count changed the painting"
+        );
         let other_seed = faroe_landscape(200, 150, 8).unwrap();
         let differing = one_thread
             .pixels()
@@ -1249,6 +1256,9 @@ mod tests {
         std::fs::write(&file, b"not a folder").unwrap();
         let result = write_assets(&file.join("inside"));
         std::fs::remove_file(&file).unwrap();
-        assert!(matches!(result, Err(AssetError::CreateDir { .. })), "{result:?}");
+        assert!(
+            matches!(result, Err(AssetError::CreateDir { .. })),
+            "{result:?}"
+        );
     }
 }

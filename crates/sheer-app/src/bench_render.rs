@@ -1,5 +1,9 @@
-//! `sheer bench render`: frames per second of the whole case study per evaluation path and for the
-//! baseline, at the scene's size (512 × 512 by default), with the time of each stage, in one run.
+//! `sheer bench render`: frames per second of the whole case study per evaluation path, with single
+//! scattering (the paper) and with all orders (the table), and for the baseline, at the scene's size
+//! (512 × 512 by default), with the time of each stage, in one run. The cases are measured in
+//! interleaved rounds, so that drift of the machine's load affects them alike; each all-orders case is
+//! also compared with single scattering on the same path round by round (median of the per-round
+//! frame-time ratios).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -8,15 +12,15 @@ use clap::Args;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{EvaluationPathName, ShadingModel};
+use crate::scene::{EvaluationPathName, Scattering, ShadingModel};
 
 #[derive(Debug, Args)]
 pub struct BenchRenderArgs {
     /// Scene file (TOML); default: the shipped default scene.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Minimum measuring time per path, seconds.
-    #[arg(long, default_value_t = 3.0)]
+    /// Minimum measuring time per case, seconds.
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
     pub seconds: f64,
     /// Print CSV instead of a table.
     #[arg(long)]
@@ -25,10 +29,17 @@ pub struct BenchRenderArgs {
 
 struct Row {
     name: &'static str,
+    path: EvaluationPathName,
+    scattering: Scattering,
     frames: u32,
     total: Duration,
     stages: StageTimes,
+    /// Mean frame time of each round, s.
+    rounds: Vec<f64>,
 }
+
+/// Frames per case per round of the interleaved measurement.
+const FRAMES_PER_ROUND: u32 = 3;
 
 pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     if !(args.seconds.is_finite() && args.seconds >= 0.0) {
@@ -41,67 +52,118 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
     let dt = 1.0 / flag.scene.render.fps;
+    use EvaluationPathName::{Cpu, Fragment, Vertex};
+    use Scattering::{AllOrders, Single};
     let cases = [
+        ("fragment", ShadingModel::ThinSlab, Fragment, Single),
         (
-            "fragment",
+            "fragment/all-orders",
             ShadingModel::ThinSlab,
-            EvaluationPathName::Fragment,
+            Fragment,
+            AllOrders,
         ),
-        ("vertex", ShadingModel::ThinSlab, EvaluationPathName::Vertex),
-        ("cpu", ShadingModel::ThinSlab, EvaluationPathName::Cpu),
+        ("vertex", ShadingModel::ThinSlab, Vertex, Single),
         (
-            "baseline",
-            ShadingModel::Baseline,
-            EvaluationPathName::Fragment,
+            "vertex/all-orders",
+            ShadingModel::ThinSlab,
+            Vertex,
+            AllOrders,
         ),
+        ("cpu", ShadingModel::ThinSlab, Cpu, Single),
+        ("cpu/all-orders", ShadingModel::ThinSlab, Cpu, AllOrders),
+        ("baseline", ShadingModel::Baseline, Fragment, Single),
     ];
-    let mut rows = Vec::new();
-    for (name, model, path) in cases {
-        flag.scene.shading.model = model;
-        flag.scene.shading.path = path;
-        let mut stages = StageTimes::default();
-        // Warm-up: pipelines compile on first use.
+    let mut rows: Vec<Row> = cases
+        .iter()
+        .map(|&(name, _, path, scattering)| Row {
+            name,
+            path,
+            scattering,
+            frames: 0,
+            total: Duration::ZERO,
+            stages: StageTimes::default(),
+            rounds: Vec::new(),
+        })
+        .collect();
+    let select =
+        |renderer: &mut FrameRenderer, flag: &mut FlagScene, case: usize| -> Result<(), CliError> {
+            let (_, model, path, scattering) = cases[case];
+            flag.scene.shading.model = model;
+            flag.scene.shading.path = path;
+            if flag.scene.shading.scattering != scattering {
+                flag.scene.shading.scattering = scattering;
+                renderer.update_shading(&flag.scene)?;
+            }
+            Ok(())
+        };
+    // Warm-up: pipelines compile and the table uploads on first use.
+    for case in 0..cases.len() {
+        select(&mut renderer, &mut flag, case)?;
         for _ in 0..3 {
             flag.advance(dt, &mut StageTimes::default())?;
             renderer.render(&flag, &mut StageTimes::default())?;
         }
-        let start = Instant::now();
-        let mut frames = 0;
-        while frames < 5 || start.elapsed().as_secs_f64() < args.seconds {
-            let mut times = StageTimes::default();
-            flag.advance(dt, &mut times)?;
-            renderer.render(&flag, &mut times)?;
-            stages.simulation += times.simulation;
-            stages.normals += times.normals;
-            stages.shading += times.shading;
-            stages.readback += times.readback;
-            frames += 1;
+    }
+    while rows
+        .iter()
+        .any(|row| row.frames < 5 || row.total.as_secs_f64() < args.seconds)
+    {
+        for (case, row) in rows.iter_mut().enumerate() {
+            select(&mut renderer, &mut flag, case)?;
+            let start = Instant::now();
+            for _ in 0..FRAMES_PER_ROUND {
+                let mut times = StageTimes::default();
+                flag.advance(dt, &mut times)?;
+                renderer.render(&flag, &mut times)?;
+                row.stages.simulation += times.simulation;
+                row.stages.normals += times.normals;
+                row.stages.shading += times.shading;
+                row.stages.readback += times.readback;
+            }
+            let elapsed = start.elapsed();
+            row.total += elapsed;
+            row.frames += FRAMES_PER_ROUND;
+            row.rounds
+                .push(elapsed.as_secs_f64() / f64::from(FRAMES_PER_ROUND));
         }
-        rows.push(Row {
-            name,
-            frames,
-            total: start.elapsed(),
-            stages,
-        });
     }
     let (w, h) = (flag.scene.render.width, flag.scene.render.height);
     let per_frame = |d: Duration, n: u32| d.as_secs_f64() * 1e3 / f64::from(n);
     let baseline_fps = {
-        let b = rows.last().expect("four rows");
+        let b = rows.last().expect("seven rows");
         f64::from(b.frames) / b.total.as_secs_f64()
+    };
+    // Median over rounds of this row's frame time over single scattering's on the same path.
+    let against_single = |row: &Row| -> Option<f64> {
+        let single = rows
+            .iter()
+            .find(|r| r.path == row.path && r.scattering == Single && r.name != "baseline")?;
+        if row.scattering != AllOrders {
+            return None;
+        }
+        let mut ratios: Vec<f64> = row
+            .rounds
+            .iter()
+            .zip(&single.rounds)
+            .map(|(a, s)| a / s)
+            .collect();
+        ratios.sort_by(f64::total_cmp);
+        let n = ratios.len();
+        Some(0.5 * (ratios[(n - 1) / 2] + ratios[n / 2]))
     };
     if args.csv {
         println!(
-            "path,width,height,fps,ratio_to_baseline,simulation_ms,normals_ms,shading_gpu_ms,readback_ms"
+            "path,width,height,fps,ratio_to_baseline,ratio_to_single,simulation_ms,normals_ms,shading_gpu_ms,readback_ms"
         );
     } else {
         println!("adapter: {}", renderer.adapter());
         println!(
-            "{:<9} {:>9} {:>8} {:>9} {:>14} {:>11} {:>13} {:>12}",
+            "{:<19} {:>9} {:>8} {:>9} {:>7} {:>14} {:>11} {:>13} {:>12}",
             "path",
             "size",
             "fps",
             "×baseline",
+            "×single",
             "simulation ms",
             "normals ms",
             "shading+GPU ms",
@@ -116,11 +178,13 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             per_frame(row.stages.shading, row.frames),
             per_frame(row.stages.readback, row.frames),
         );
+        let single = against_single(row);
         if args.csv {
             println!(
-                "{},{w},{h},{fps:.2},{:.3},{:.3},{:.3},{:.3},{:.3}",
+                "{},{w},{h},{fps:.2},{:.3},{},{:.3},{:.3},{:.3},{:.3}",
                 row.name,
                 baseline_fps / fps,
+                single.map_or(String::new(), |r| format!("{r:.3}")),
                 values.0,
                 values.1,
                 values.2,
@@ -128,11 +192,12 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             );
         } else {
             println!(
-                "{:<9} {:>9} {:>8.1} {:>9.2} {:>14.2} {:>11.2} {:>13.2} {:>12.2}",
+                "{:<19} {:>9} {:>8.1} {:>9.2} {:>7} {:>14.2} {:>11.2} {:>13.2} {:>12.2}",
                 row.name,
                 format!("{w}x{h}"),
                 fps,
                 baseline_fps / fps,
+                single.map_or("-".to_string(), |r| format!("{r:.2}")),
                 values.0,
                 values.1,
                 values.2,
@@ -141,7 +206,10 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         }
     }
     if !args.csv {
-        println!("×baseline: frame time relative to the baseline's (cost ratio; 1.00 = as fast).");
+        println!(
+            "×baseline: frame time relative to the baseline's (cost ratio; 1.00 = as fast). ×single: \
+             all orders against single scattering on the same path, median of per-round ratios."
+        );
     }
     Ok(())
 }

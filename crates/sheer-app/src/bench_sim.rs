@@ -21,65 +21,31 @@ pub struct BenchSimArgs {
     /// Grids as COLUMNSxROWS (comma-separated). Default: 16x11,64x46,256x186,1024x745.
     #[arg(long, value_delimiter = ',')]
     pub grid: Vec<String>,
-    /// Sub-steps per frame for every method (default: each method's stable setting on the flag).
-    #[arg(long)]
+    /// Sub-steps per frame for every method (default: each method's stable setting on the flag,
+    /// `Method::stable_flag_setting`).
+    #[arg(long, allow_negative_numbers = true)]
     pub substeps: Option<u32>,
     /// Solver iterations per sub-step (PBD, XPBD) or the CG iteration cap (implicit Euler).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub iterations: Option<u32>,
     /// rayon thread counts to measure (comma-separated). Default: 1 and all cores.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub threads: Vec<usize>,
     /// Particle count from which passes run on rayon's pool (default: the library's measured threshold;
     /// 0 forces the parallel code paths on, for finding the crossover).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub parallel_min_particles: Option<usize>,
     /// Minimum measuring time per case, seconds (at least one frame is always timed).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
     /// Print CSV: method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s
     #[arg(long)]
     pub csv: bool,
 }
 
-/// The sub-steps and iterations at which each method is stable on the default flag at 60 Hz in a 6 m/s
-/// wind (found with `sheer bench sim --substeps N`; forward Euler is unstable at any practical count).
-pub fn stable_setting(name: &str) -> Option<Method> {
-    Some(match name {
-        "explicit_euler" => Method::ExplicitEuler { substeps: 400 },
-        "symplectic_euler" => Method::SymplecticEuler { substeps: 200 },
-        "verlet" => Method::Verlet { substeps: 200 },
-        "implicit_euler" => Method::ImplicitEuler {
-            substeps: 1,
-            cg_max_iterations: 100,
-            cg_tolerance: 1e-4,
-        },
-        "pbd" => Method::Pbd {
-            substeps: 4,
-            iterations: 10,
-            stiffness: 1.0,
-        },
-        "xpbd" => Method::Xpbd {
-            substeps: 2,
-            iterations: 20,
-        },
-        "small_steps_xpbd" => Method::SmallStepsXpbd { substeps: 20 },
-        _ => return None,
-    })
-}
-
-/// Every method's name, as `Method::name` prints it, in the order tables and menus list them.
-pub const METHOD_NAMES: [&str; 7] = [
-    "explicit_euler",
-    "symplectic_euler",
-    "verlet",
-    "implicit_euler",
-    "pbd",
-    "xpbd",
-    "small_steps_xpbd",
-];
-
-fn with_knobs(method: Method, substeps: Option<u32>, iterations: Option<u32>) -> Method {
+/// `method` with the given sub-steps and iterations (PBD, XPBD; the CG cap of implicit Euler), its
+/// other knobs unchanged (also used by the window's panel).
+pub fn with_knobs(method: Method, substeps: Option<u32>, iterations: Option<u32>) -> Method {
     let s = |x: u32| substeps.unwrap_or(x);
     let i = |x: u32| iterations.unwrap_or(x);
     match method {
@@ -223,16 +189,16 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         )));
     }
     let names: Vec<String> = if args.method.is_empty() {
-        METHOD_NAMES.iter().map(|s| s.to_string()).collect()
+        Method::NAMES.iter().map(|s| s.to_string()).collect()
     } else {
         args.method.clone()
     };
     let mut methods = Vec::new();
     for name in &names {
-        let method = stable_setting(name).ok_or_else(|| {
+        let method = Method::stable_flag_setting(name).ok_or_else(|| {
             CliError::new(format!(
                 "unknown method `{name}` (expected one of {})",
-                METHOD_NAMES.join(", ")
+                Method::NAMES.join(", ")
             ))
         })?;
         if args.substeps == Some(0) || args.iterations == Some(0) {

@@ -1,6 +1,7 @@
 //! `sheer`: the thin-cloth engine's command line.
 //!
-//! Every failure prints one line, `error: …`, and exits with status 1 (usage errors: clap's status 2).
+//! Every failure prints one line, `error: …`, and exits with status 1 (usage errors: clap's status 2,
+//! also on one line).
 
 mod assets;
 mod bench_render;
@@ -58,20 +59,31 @@ impl From<sheer_cloth::SetupError> for CliError {
     }
 }
 
-/// The scene at `path`, or the default scene when `None`.
+/// The scene at `path`, or the default scene (built into the binary) when `None`.
 pub fn load_scene(path: Option<&std::path::Path>) -> Result<scene::Scene, CliError> {
     match path {
         Some(path) => scene::Scene::load(path),
-        None => {
-            let default = scene::Scene::default();
-            let path = default.base_dir.join("default.scene.toml");
-            if path.exists() {
-                scene::Scene::load(&path)
-            } else {
-                Ok(default)
-            }
-        }
+        None => scene::Scene::builtin_default(),
     }
+}
+
+/// Clap's usage error on one line: its message and tip, without the usage block and the pointer to
+/// `--help`.
+fn one_line_usage_error(error: &clap::Error) -> String {
+    let text = error.to_string();
+    let body = text.split("\nUsage:").next().unwrap_or(&text);
+    let mut line = String::new();
+    for part in body
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("For more information"))
+    {
+        if !line.is_empty() {
+            line.push_str(if line.ends_with(':') { " " } else { "; " });
+        }
+        line.push_str(part);
+    }
+    line
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
@@ -98,8 +110,8 @@ struct Cli {
     /// Window: scene file (TOML); default: the shipped default scene.
     #[arg(long)]
     scene: Option<std::path::PathBuf>,
-    /// Window: run this many frames, then exit (after the screenshot, with --screenshot).
-    #[arg(long)]
+    /// Window: run this many frames (≥ 1), then exit (after the screenshot, with --screenshot).
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
     /// Window: save a screenshot of the whole window as PNG after --frames frames.
     #[arg(long, requires = "frames")]
@@ -118,6 +130,9 @@ enum Command {
     Slab(slab_cmd::SlabArgs),
     /// Regenerate the procedural assets: the Faroe flag texture and the watercolour painting.
     Assets(AssetsArgs),
+    /// Speed against accuracy of the simulator: work–precision, stability map, ablation and the
+    /// automatic choice of the default flag's method (docs/study.md).
+    Study(sheer_study::StudyArgs),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -139,7 +154,22 @@ enum BenchCommand {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                error.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                error.exit();
+            }
+            eprintln!("{}", one_line_usage_error(&error));
+            return ExitCode::from(2);
+        }
+    };
     let result = match &cli.command {
         None => window::run(window::WindowOptions {
             scene: cli.scene.clone(),
@@ -160,6 +190,9 @@ fn main() -> ExitCode {
                 assets::write_assets(&args.out).map_err(|e| CliError::new(e.to_string()))
             }),
         Some(Command::Simulate(args)) => simulate::run(args),
+        Some(Command::Study(args)) => {
+            sheer_study::run(args).map_err(|e| CliError::new(e.to_string()))
+        }
         Some(Command::Bench(BenchCommand::Sim(args))) => bench_sim::run(args),
         Some(Command::Bench(BenchCommand::Render(args))) => bench_render::run(args),
     };

@@ -32,17 +32,37 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "out_dir")]
     pub out: Option<PathBuf>,
     /// Render a sequence of this many frames (1/fps apart) into --out-dir.
-    #[arg(long, requires = "out_dir")]
+    #[arg(
+        long,
+        requires = "out_dir",
+        conflicts_with = "out",
+        allow_negative_numbers = true
+    )]
     pub frames: Option<u32>,
     /// Directory for frame_0000.png … of a sequence.
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
-    /// Image format of a sequence.
-    #[arg(long, value_enum, default_value_t = ImageFormat::Png)]
+    /// Image format of a sequence (a single --out frame takes its format from the extension).
+    #[arg(long, value_enum, default_value_t = ImageFormat::Png, conflicts_with = "out")]
     pub format: ImageFormat,
-    /// Scene time of a single frame, s (the flag is simulated up to it).
-    #[arg(long, default_value_t = 2.0)]
+    /// Scene time of a single frame, s, in [0, 3600] (the flag is simulated up to it).
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub time: f32,
+}
+
+/// Latest scene time a frame may be rendered at, s: an hour of simulated flag (216 000 frames at
+/// 60 Hz) is already minutes of computing.
+pub const MAX_SCENE_TIME_S: f32 = 3600.0;
+
+/// Checks a `--time` argument: finite and in [0, [`MAX_SCENE_TIME_S`]].
+pub fn check_time(time: f32) -> Result<(), CliError> {
+    if time.is_finite() && (0.0..=MAX_SCENE_TIME_S).contains(&time) {
+        Ok(())
+    } else {
+        Err(CliError::new(format!(
+            "--time must lie in [0, 3600] s, got {time}"
+        )))
+    }
 }
 
 /// Saves a linear image as PNG (exposure, sRGB) or OpenEXR (linear float), by extension.
@@ -67,7 +87,14 @@ pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(),
 /// Simulates the scene up to `time` seconds at its frame rate.
 pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
     let dt = 1.0 / flag.scene.render.fps;
-    let steps = (time / dt).round() as u32;
+    let steps = (f64::from(time) / f64::from(dt)).round();
+    if !(0.0..=f64::from(u32::MAX)).contains(&steps) {
+        return Err(CliError::new(format!(
+            "cannot simulate {time} s at {} frames/s: {steps} frames",
+            flag.scene.render.fps
+        )));
+    }
+    let steps = steps as u32;
     let mut times = StageTimes::default();
     for _ in 0..steps {
         flag.advance(dt, &mut times)?;
@@ -76,13 +103,8 @@ pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
+    check_time(args.time)?;
     let scene = crate::load_scene(args.scene.as_deref())?;
-    if !(args.time.is_finite() && args.time >= 0.0) {
-        return Err(CliError::new(format!(
-            "--time must be ≥ 0 s, got {}",
-            args.time
-        )));
-    }
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
     let exposure = renderer.exposure();
@@ -141,8 +163,8 @@ pub struct Figure2Args {
     /// Scene file (TOML); default: the shipped default scene.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Scene time at which the flag is captured, s.
-    #[arg(long, default_value_t = 2.0)]
+    /// Scene time at which the flag is captured, s, in [0, 3600].
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub time: f32,
     /// Also write the four panels as linear OpenEXR (RGBA, alpha = transmittance through the flag):
     /// baseline_back.exr, baseline_front.exr, thin_slab_back.exr, thin_slab_front.exr.
@@ -244,16 +266,22 @@ pub fn draw_label(image: &mut RgbImage, text: &str, x: f32, y: f32, size: f32) {
     }
 }
 
-/// The 2×2 figure with labels, as an sRGB image.
-pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32) -> RgbImage {
+/// The panels' labels, in [`figure2_panels`] order: the baseline's α is the scene's
+/// (`shading.baseline_alpha`); the thin-slab panels are always rendered with Λ = 1, τ1 = 2.
+pub fn figure2_labels(baseline_alpha: f32) -> [String; 4] {
+    [
+        format!("baseline, α = {baseline_alpha} — back-lit"),
+        format!("baseline, α = {baseline_alpha} — front-lit"),
+        "thin slab, Λ = 1, τ₁ = 2 — back-lit".to_string(),
+        "thin slab, Λ = 1, τ₁ = 2 — front-lit".to_string(),
+    ]
+}
+
+/// The 2×2 figure with labels, as an sRGB image; `baseline_alpha` is the baseline panels' α.
+pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32, baseline_alpha: f32) -> RgbImage {
     let (w, h) = (panels[0].width, panels[0].height);
     let mut figure = RgbImage::new(2 * w, 2 * h);
-    let labels = [
-        "baseline, α = 0.2 — back-lit",
-        "baseline, α = 0.2 — front-lit",
-        "thin slab, Λ = 1, τ₁ = 2 — back-lit",
-        "thin slab, Λ = 1, τ₁ = 2 — front-lit",
-    ];
+    let labels = figure2_labels(baseline_alpha);
     for (k, panel) in panels.iter().enumerate() {
         let (ox, oy) = ((k as u32 % 2) * w, (k as u32 / 2) * h);
         let bytes = panel.to_srgb8(exposure);
@@ -265,7 +293,7 @@ pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32) -> RgbImage {
         }
         draw_label(
             &mut figure,
-            labels[k],
+            &labels[k],
             ox as f32 + 10.0,
             oy as f32 + 8.0,
             (h as f32 / 20.0).max(12.0),
@@ -275,6 +303,7 @@ pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32) -> RgbImage {
 }
 
 pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
+    check_time(args.time)?;
     let scene = crate::load_scene(args.scene.as_deref())?;
     let panels = figure2_panels(&scene, args.time)?;
     if let Some(dir) = &args.linear_dir {
@@ -284,10 +313,38 @@ pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
             save_exr_rgba(panel, &dir.join(format!("{name}.exr")))?;
         }
     }
-    let figure = figure2_image(&panels, scene.shading.exposure);
+    let figure = figure2_image(
+        &panels,
+        scene.shading.exposure,
+        scene.shading.baseline_alpha,
+    );
     figure
         .save(&args.out)
         .map_err(|e| CliError::new(format!("cannot write {}: {e}", args.out.display())))?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod label_tests {
+    use super::*;
+
+    #[test]
+    fn the_baseline_labels_give_the_scenes_alpha() {
+        let labels = figure2_labels(0.35);
+        assert!(labels[0].contains("α = 0.35") && labels[1].contains("α = 0.35"));
+        assert!(labels.iter().all(|l| !l.contains("α = 0.2")));
+        assert_eq!(figure2_labels(0.2)[0], "baseline, α = 0.2 — back-lit");
+    }
+
+    #[test]
+    fn scene_times_outside_an_hour_are_refused() {
+        for time in [0.0, 2.0, 3600.0] {
+            assert!(check_time(time).is_ok(), "{time}");
+        }
+        for time in [-5.0, -0.0001, 3600.5, 1e9, f32::NAN, f32::INFINITY] {
+            let error = check_time(time).unwrap_err().to_string();
+            assert!(error.contains("--time"), "{error}");
+        }
+    }
 }

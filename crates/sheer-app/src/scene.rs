@@ -2,8 +2,9 @@
 //! and its simulation, the thin-slab shading, the circling light, the camera, the background and the
 //! output size — or, instead of the flag, a static flat sheet whose render can be checked by hand.
 //!
-//! Unknown keys are errors (serde's `deny_unknown_fields`), and [`Scene::validate`] names the key of any
-//! out-of-range value. The default scene is `assets/default.scene.toml`; every key is documented there.
+//! Unknown keys are errors (serde's `deny_unknown_fields`), so are arrays of the wrong length, and
+//! [`Scene::validate`] names the key of any out-of-range value. The default scene is
+//! `assets/default.scene.toml`, built into the binary with its images; every key is documented there.
 
 use std::path::{Path, PathBuf};
 
@@ -33,6 +34,18 @@ pub enum EvaluationPathName {
     Cpu,
 }
 
+/// Which orders of scattering the thin slab's diffuse radiance includes (`shading.scattering`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Scattering {
+    /// Single scattering, eqs. (4)–(5): the paper's model.
+    #[serde(rename = "single")]
+    Single,
+    /// All orders: eqs. (4)–(5) plus the multiply-scattered radiance from the precomputed table
+    /// (`assets/all_orders_table.bin`, built into the binary); τ1 must lie in its range [0.01, 10].
+    #[serde(rename = "all-orders")]
+    AllOrders,
+}
+
 /// Which irradiance goes into eqs. (4)–(5) (see the sheer-slab README for the finding).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -45,6 +58,8 @@ pub enum Convention {
 #[serde(deny_unknown_fields, default)]
 pub struct ShadingSection {
     pub model: ShadingModel,
+    /// Single scattering (the paper) or all orders (eqs. (4)–(5) + the table's multiple part).
+    pub scattering: Scattering,
     pub path: EvaluationPathName,
     /// τ1, the slab's optical thickness (dimensionless, > 0), per channel.
     pub optical_thickness: [f32; 3],
@@ -66,6 +81,7 @@ impl Default for ShadingSection {
     fn default() -> Self {
         ShadingSection {
             model: ShadingModel::ThinSlab,
+            scattering: Scattering::Single,
             path: EvaluationPathName::Fragment,
             optical_thickness: [2.0; 3],
             albedo_scale: [1.0; 3],
@@ -238,16 +254,33 @@ pub struct Scene {
     /// Directory relative paths are resolved against (the scene file's folder); not in the file.
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// Relative paths name the images built into the binary ([`BUILTIN_ASSETS`]) instead of files
+    /// in `base_dir`: the default scene, so that an installed `sheer` needs no source tree. Not in
+    /// the file.
+    #[serde(skip)]
+    pub builtin_assets: bool,
 }
+
+/// The shipped default scene, built into the binary (every key is documented there).
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../../assets/default.scene.toml");
+
+/// The default scene's images, built into the binary under the names its file uses.
+pub const BUILTIN_ASSETS: [(&str, &[u8]); 2] = [
+    (
+        "faroe_flag.png",
+        include_bytes!("../../../assets/faroe_flag.png"),
+    ),
+    (
+        "faroe_landscape.png",
+        include_bytes!("../../../assets/faroe_landscape.png"),
+    ),
+];
 
 impl Default for Scene {
     fn default() -> Self {
-        let mut simulation = SimParams::default();
         // A fresh breeze across the flag at 27° from its plane, gusting and turbulent: enough to make it
-        // wave rather than stream flat.
-        simulation.wind.velocity = sheer_cloth::glam::DVec3::new(5.0, 0.0, 2.5);
-        simulation.wind.gust_strength = 0.5;
-        simulation.wind.turbulence = 0.4;
+        // wave rather than stream flat; integrated by the study's automatic choice (docs/choice.toml).
+        let simulation = SimParams::waving_flag();
         Scene {
             flag: GridSpec::default(),
             simulation,
@@ -257,7 +290,8 @@ impl Default for Scene {
             background: BackgroundSection::default(),
             render: RenderSection::default(),
             static_sheet: None,
-            base_dir: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets"),
+            base_dir: PathBuf::new(),
+            builtin_assets: true,
         }
     }
 }
@@ -270,8 +304,76 @@ fn check(ok: bool, key: &str, value: impl std::fmt::Debug, rule: &str) -> Result
     }
 }
 
+/// Largest particle grid side: `sheer bench sim`'s largest grid is 1024 × 745; a larger one runs
+/// out of memory (or time) before it shows anything.
+pub const MAX_GRID_SIDE: usize = 1024;
+/// Most sub-steps per frame a scene may ask for: far above any stable setting (forward Euler on the
+/// default flag needs 1600), low enough that a typo does not hang the program.
+pub const MAX_SUBSTEPS: u32 = 100_000;
+/// Most solver iterations (PBD, XPBD) or conjugate-gradient iterations (implicit Euler) per sub-step.
+pub const MAX_ITERATIONS: u32 = 10_000;
+/// Frames per simulated second: the simulation steps 1/fps per frame.
+pub const FPS_RANGE: (f32, f32) = (1.0, 1000.0);
+/// Largest light flux, W. Far above any lamp (the irradiance at 1 m is 8·10⁴ W/m², about 60 suns)
+/// and far enough below f32's 3.4·10³⁸ that no radiance overflows.
+pub const MAX_FLUX_W: f32 = 1e6;
+/// Largest background radiance (colour, painting white), W/(m²·sr), and largest display exposure:
+/// the same margin against overflow.
+pub const MAX_RADIANCE: f32 = 1e6;
+/// Positions (m) must lie within this distance of the origin along every axis: f32 coordinates
+/// further out lose the millimetres the cloth is made of.
+pub const MAX_COORDINATE_M: f32 = 1e4;
+/// Largest flag side, m.
+pub const MAX_FLAG_SIZE_M: f64 = 100.0;
+
+/// toml fills a fixed-size array (and a glam vector) from the first elements of a longer array and
+/// drops the rest without a word: compare every array in the file with the one the scene read.
+fn check_array_lengths(text: &str, scene: &Scene) -> Result<(), CliError> {
+    match (toml::de::DeTable::parse(text), toml::Value::try_from(scene)) {
+        (Ok(file), Ok(toml::Value::Table(read))) => compare_arrays(text, file.get_ref(), &read, ""),
+        // The text parsed already, and a scene always serialises.
+        _ => Ok(()),
+    }
+}
+
+fn compare_arrays(
+    text: &str,
+    file: &toml::de::DeTable,
+    read: &toml::Table,
+    prefix: &str,
+) -> Result<(), CliError> {
+    for (key, value) in file {
+        let key: &str = key.get_ref();
+        let path = format!("{prefix}{key}");
+        match (value.get_ref(), read.get(key)) {
+            (toml::de::DeValue::Table(inner), Some(toml::Value::Table(read))) => {
+                compare_arrays(text, inner, read, &format!("{path}."))?
+            }
+            (toml::de::DeValue::Array(values), Some(toml::Value::Array(read)))
+                if values.len() != read.len() =>
+            {
+                return Err(CliError::new(format!(
+                    "scene: `{path}` has {} values: it takes {}",
+                    values.len(),
+                    read.len()
+                ))
+                .with_span(text, Some(value.span())));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// A position in metres: finite and within [`MAX_COORDINATE_M`] of the origin.
 fn finite3(key: &str, v: [f32; 3]) -> Result<(), CliError> {
-    check(v.iter().all(|c| c.is_finite()), key, v, "must be finite")
+    check(
+        v.iter()
+            .all(|c| c.is_finite() && c.abs() <= MAX_COORDINATE_M),
+        key,
+        v,
+        "must be finite and within 10 km of the origin",
+    )
 }
 
 impl Scene {
@@ -281,7 +383,17 @@ impl Scene {
             CliError::new(format!("scene: {}", e.message().trim())).with_span(text, e.span())
         })?;
         scene.base_dir = base_dir.to_path_buf();
+        scene.builtin_assets = false;
+        check_array_lengths(text, &scene)?;
         scene.validate()?;
+        Ok(scene)
+    }
+
+    /// The shipped default scene ([`DEFAULT_SCENE_TOML`]) with its images, as built into the binary.
+    pub fn builtin_default() -> Result<Scene, CliError> {
+        let mut scene = Scene::from_toml(DEFAULT_SCENE_TOML, Path::new(""))
+            .map_err(|e| CliError::new(format!("the built-in default scene: {e}")))?;
+        scene.builtin_assets = true;
         Ok(scene)
     }
 
@@ -303,13 +415,89 @@ impl Scene {
         self.base_dir.join(relative)
     }
 
+    /// The bytes of the file that `key` names (relative to the scene file, or built in); the error
+    /// names the key.
+    pub fn read_asset(
+        &self,
+        key: &str,
+        relative: &str,
+    ) -> Result<std::borrow::Cow<'static, [u8]>, CliError> {
+        if self.builtin_assets {
+            return BUILTIN_ASSETS
+                .iter()
+                .find(|(name, _)| *name == relative)
+                .map(|(_, bytes)| std::borrow::Cow::Borrowed(*bytes))
+                .ok_or_else(|| {
+                    let names: Vec<&str> = BUILTIN_ASSETS.iter().map(|(name, _)| *name).collect();
+                    CliError::new(format!(
+                        "scene: `{key}` = {relative:?}: the built-in default scene has only {}",
+                        names.join(" and ")
+                    ))
+                });
+        }
+        let path = self.resolve(relative);
+        std::fs::read(&path)
+            .map(std::borrow::Cow::Owned)
+            .map_err(|e| {
+                CliError::new(format!(
+                    "scene: `{key}` = {relative:?}: cannot read {}: {e}",
+                    path.display()
+                ))
+            })
+    }
+
     /// Checks every value's range; the error names the key.
     pub fn validate(&self) -> Result<(), CliError> {
+        let f = &self.flag;
+        for (key, side) in [("flag.columns", f.columns), ("flag.rows", f.rows)] {
+            check(
+                (2..=MAX_GRID_SIDE).contains(&side),
+                key,
+                side,
+                "must lie in [2, 1024] particles",
+            )?;
+        }
+        for (key, size) in [("flag.width", f.width), ("flag.height", f.height)] {
+            check(
+                size.is_finite() && size > 0.0 && size <= MAX_FLAG_SIZE_M,
+                key,
+                size,
+                "must lie in (0, 100] m",
+            )?;
+        }
+        check(
+            f.areal_density.is_finite() && f.areal_density > 0.0,
+            "flag.areal_density",
+            f.areal_density,
+            "must be finite and > 0 kg/m²",
+        )?;
+        finite3("flag.origin", f.origin.as_vec3().to_array())?;
+        // The model's own checks (cells with no area, …), in its words.
         sheer_cloth::ClothModel::grid(&self.flag)
             .map_err(|e| CliError::new(format!("scene: [flag]: {e}")))?;
-        self.simulation
-            .validate()
-            .map_err(|e| CliError::new(format!("scene: [simulation]: {e}")))?;
+        self.simulation.validate().map_err(|e| {
+            CliError::new(format!(
+                "scene: `simulation.{}` = {}: {}",
+                e.name, e.value, e.reason
+            ))
+        })?;
+        let method = &self.simulation.method;
+        check(
+            method.substeps() <= MAX_SUBSTEPS,
+            "simulation.method.substeps",
+            method.substeps(),
+            "must lie in [1, 100000]",
+        )?;
+        let iterations_key = match method {
+            sheer_cloth::Method::ImplicitEuler { .. } => "simulation.method.cg_max_iterations",
+            _ => "simulation.method.iterations",
+        };
+        check(
+            method.iterations() <= MAX_ITERATIONS,
+            iterations_key,
+            method.iterations(),
+            "must lie in [1, 10000]",
+        )?;
         let s = &self.shading;
         check(
             s.optical_thickness
@@ -334,24 +522,24 @@ impl Scene {
             "must lie in [0, 1]",
         )?;
         check(
-            s.exposure.is_finite() && s.exposure > 0.0,
+            s.exposure.is_finite() && s.exposure > 0.0 && s.exposure <= MAX_RADIANCE,
             "shading.exposure",
             s.exposure,
-            "must be finite and > 0",
+            "must lie in (0, 1e6]",
         )?;
         let l = &self.light;
         check(
-            l.flux.is_finite() && l.flux >= 0.0,
+            l.flux.is_finite() && (0.0..=MAX_FLUX_W).contains(&l.flux),
             "light.flux",
             l.flux,
-            "must be finite and ≥ 0 W",
+            "must lie in [0, 1e6] W",
         )?;
         finite3("light.centre", l.centre)?;
         check(
-            l.radius.is_finite() && l.radius > 0.0,
+            l.radius.is_finite() && l.radius > 0.0 && l.radius <= MAX_COORDINATE_M,
             "light.radius",
             l.radius,
-            "must be finite and > 0 m",
+            "must lie in (0, 10000] m",
         )?;
         check(
             l.period.is_finite(),
@@ -374,6 +562,16 @@ impl Scene {
             c.target,
             "must differ from camera.position",
         )?;
+        // The camera's up is +y: looking along it leaves no direction for "up" in the image (the
+        // view matrix degenerates and nothing is drawn). 0.01 rad ≈ 0.6°.
+        let view = (glam::Vec3::from_array(c.target) - glam::Vec3::from_array(c.position))
+            .normalize_or_zero();
+        check(
+            view.cross(glam::Vec3::Y).length() >= 0.01,
+            "camera.target",
+            c.target,
+            "the view direction from camera.position must not lie within 0.6° of the up axis (±y)",
+        )?;
         check(
             c.vertical_fov_degrees > 1.0 && c.vertical_fov_degrees < 179.0,
             "camera.vertical_fov_degrees",
@@ -382,16 +580,18 @@ impl Scene {
         )?;
         let b = &self.background;
         check(
-            b.colour.iter().all(|v| v.is_finite() && *v >= 0.0),
+            b.colour
+                .iter()
+                .all(|v| v.is_finite() && (0.0..=MAX_RADIANCE).contains(v)),
             "background.colour",
             b.colour,
-            "must be finite and ≥ 0",
+            "must lie in [0, 1e6] W/(m²·sr)",
         )?;
         check(
-            b.radiance_scale.is_finite() && b.radiance_scale >= 0.0,
+            b.radiance_scale.is_finite() && (0.0..=MAX_RADIANCE).contains(&b.radiance_scale),
             "background.radiance_scale",
             b.radiance_scale,
-            "must be finite and ≥ 0",
+            "must lie in [0, 1e6] W/(m²·sr)",
         )?;
         let r = &self.render;
         check(
@@ -407,10 +607,10 @@ impl Scene {
             "must lie in [16, 8192] pixels",
         )?;
         check(
-            r.fps.is_finite() && r.fps > 0.0,
+            r.fps.is_finite() && (FPS_RANGE.0..=FPS_RANGE.1).contains(&r.fps),
             "render.fps",
             r.fps,
-            "must be finite and > 0",
+            "must lie in [1, 1000] frames per simulated second",
         )?;
         check(
             r.warmup.is_finite() && (0.0..=600.0).contains(&r.warmup),
@@ -421,10 +621,13 @@ impl Scene {
         if let Some(sheet) = &self.static_sheet {
             finite3("static_sheet.centre", sheet.centre)?;
             check(
-                sheet.size.iter().all(|v| v.is_finite() && *v > 0.0),
+                sheet
+                    .size
+                    .iter()
+                    .all(|v| v.is_finite() && *v > 0.0 && *v <= MAX_COORDINATE_M),
                 "static_sheet.size",
                 sheet.size,
-                "must be finite and > 0 m",
+                "must lie in (0, 10000] m",
             )?;
             check(
                 sheet.tilt_degrees.is_finite(),
@@ -470,6 +673,7 @@ mod tests {
         let scene = Scene::load(&path).unwrap();
         let default = Scene {
             base_dir: scene.base_dir.clone(),
+            builtin_assets: false,
             ..Scene::default()
         };
         assert_eq!(scene, default);
@@ -487,9 +691,37 @@ mod tests {
     }
 
     #[test]
+    fn the_default_flag_uses_the_studys_choice() {
+        // docs/choice.toml is written by `sheer study choose|all`: the cheapest method within the
+        // flag's error budget, measured on the flag recorded with it. The default scene must run that
+        // method, and on that flag: a changed default (fabric, wind, grid) needs a new choice.
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../docs/choice.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let file: sheer_study::ChoiceFile = toml::from_str(&text).unwrap();
+        assert!(!file.quick, "docs/choice.toml comes from a --quick run");
+        let scene = Scene::load(&assets().join("default.scene.toml")).unwrap();
+        let method = scene.simulation.method;
+        assert_eq!(
+            (method.name(), method.substeps(), method.iterations()),
+            (
+                file.choice.method.as_str(),
+                file.choice.substeps,
+                file.choice.iterations
+            ),
+            "the default scene's method differs from docs/choice.toml"
+        );
+        assert_eq!(
+            (scene.flag, &scene.simulation),
+            (file.scene.flag, &file.scene.simulation),
+            "docs/choice.toml was measured on another flag: rerun `cargo run --release -- study choose --out docs`"
+        );
+    }
+
+    #[test]
     fn an_empty_file_is_the_default_scene() {
         let default = Scene {
             base_dir: assets(),
+            builtin_assets: false,
             ..Scene::default()
         };
         assert_eq!(parse("").unwrap(), default);
@@ -559,9 +791,12 @@ mod tests {
     #[test]
     fn out_of_range_values_are_errors_naming_the_key() {
         for (text, key) in [
-            ("[flag]\ncolumns = 1", "[flag]"),
-            ("[flag]\nareal_density = -0.2", "[flag]"),
-            ("[simulation.stretch]\nstiffness = 0.0", "stretch"),
+            ("[flag]\ncolumns = 1", "flag.columns"),
+            ("[flag]\nareal_density = -0.2", "flag.areal_density"),
+            (
+                "[simulation.stretch]\nstiffness = 0.0",
+                "simulation.stretch.stiffness",
+            ),
             (
                 "[simulation.method]\nkind = \"xpbd\"\nsubsteps = 0\niterations = 3",
                 "method.substeps",
@@ -603,5 +838,784 @@ mod tests {
             assert!(error.contains(key), "{text}: {error}");
             assert_eq!(error.lines().count(), 1, "{error}");
         }
+    }
+
+    #[test]
+    fn the_scattering_key_takes_single_or_all_orders_and_names_itself_when_wrong() {
+        assert_eq!(parse("").unwrap().shading.scattering, Scattering::Single);
+        let all = parse("[shading]\nscattering = \"all-orders\"").unwrap();
+        assert_eq!(all.shading.scattering, Scattering::AllOrders);
+        for wrong in ["double", "all_orders", "Single"] {
+            let error = parse(&format!("[shading]\nscattering = \"{wrong}\"")).unwrap_err();
+            assert!(
+                error.contains("scattering")
+                    && error.contains(wrong)
+                    && error.contains("all-orders"),
+                "{error}"
+            );
+            assert_eq!(error.lines().count(), 1, "{error}");
+        }
+    }
+}
+
+/// Scene-file parsing, key by key: every key is accepted and lands where it should, and every kind of
+/// bad value is a one-line error naming its key.
+#[cfg(test)]
+mod key_tests {
+    use super::*;
+
+    fn assets() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets")
+    }
+
+    fn parse(text: &str) -> Result<Scene, String> {
+        Scene::from_toml(text, &assets()).map_err(|e| e.to_string())
+    }
+
+    /// The value at a dotted `path` of a TOML table.
+    fn lookup<'a>(table: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
+        let (head, rest) = path.split_once('.').unwrap_or((path, ""));
+        let value = table.get(head)?;
+        if rest.is_empty() {
+            Some(value)
+        } else {
+            lookup(value.as_table()?, rest)
+        }
+    }
+
+    /// Every leaf key of a TOML table, dotted.
+    fn leaf_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
+        for (key, value) in table {
+            let path = format!("{prefix}{key}");
+            match value.as_table() {
+                Some(inner) => leaf_keys(inner, &format!("{path}."), keys),
+                None => keys.push(path),
+            }
+        }
+    }
+
+    /// Every key but the method's knobs (see `every_method_kind_takes_its_knobs`), with a valid
+    /// value other than its default; f32 values are exact in binary so they print back unchanged.
+    const EVERY_KEY: &[(&str, &str)] = &[
+        ("flag.columns", "32"),
+        ("flag.rows", "23"),
+        ("flag.width", "1.5"),
+        ("flag.height", "1.25"),
+        ("flag.areal_density", "0.25"),
+        ("flag.origin", "[0.5, 1.5, -0.5]"),
+        ("simulation.gravity", "[0.0, -9.5, 0.0]"),
+        ("simulation.air_damping", "0.25"),
+        ("simulation.long_range_attachments", "false"),
+        ("simulation.parallel_min_particles", "1024"),
+        ("simulation.stretch.enabled", "false"),
+        ("simulation.stretch.stiffness", "500.0"),
+        ("simulation.stretch.damping", "0.5"),
+        ("simulation.shear.enabled", "false"),
+        ("simulation.shear.stiffness", "50.0"),
+        ("simulation.shear.damping", "0.25"),
+        ("simulation.bend.enabled", "false"),
+        ("simulation.bend.stiffness", "7.5"),
+        ("simulation.bend.damping", "0.125"),
+        ("simulation.wind.velocity", "[3.0, 0.0, 1.5]"),
+        ("simulation.wind.air_density", "1.25"),
+        ("simulation.wind.drag_coefficient", "1.5"),
+        ("simulation.wind.lift_coefficient", "0.25"),
+        ("simulation.wind.gust_strength", "0.25"),
+        ("simulation.wind.turbulence", "0.5"),
+        ("simulation.wind.gust_frequency", "0.75"),
+        ("simulation.wind.seed", "7"),
+        ("simulation.wind.per_substep", "false"),
+        ("simulation.divergence.max_speed", "150.0"),
+        ("simulation.divergence.max_strain", "5.0"),
+        ("shading.model", "\"split\""),
+        ("shading.path", "\"vertex\""),
+        ("shading.optical_thickness", "[1.5, 2.5, 3.0]"),
+        ("shading.albedo_scale", "[0.5, 0.75, 1.0]"),
+        ("shading.albedo_texture", "\"\""),
+        ("shading.thickness_texture", "\"faroe_flag.png\""),
+        ("shading.convention", "\"paper_literal\""),
+        ("shading.scattering", "\"all-orders\""),
+        ("shading.baseline_alpha", "0.5"),
+        ("shading.exposure", "1.5"),
+        ("light.flux", "125.0"),
+        ("light.centre", "[0.5, 0.5, 0.25]"),
+        ("light.radius", "2.5"),
+        ("light.period", "-6.0"),
+        ("light.phase", "1.5"),
+        ("light.marker", "false"),
+        ("camera.position", "[1.0, 0.5, 3.0]"),
+        ("camera.target", "[0.5, 0.25, 0.0]"),
+        ("camera.vertical_fov_degrees", "30.0"),
+        ("background.image", "\"\""),
+        ("background.colour", "[0.25, 0.5, 0.75]"),
+        ("background.radiance_scale", "2.0"),
+        ("render.width", "640"),
+        ("render.height", "480"),
+        ("render.fps", "30.0"),
+        ("render.warmup", "0.5"),
+        ("static_sheet.centre", "[0.5, 0.25, 0.0]"),
+        ("static_sheet.size", "[2.0, 0.5]"),
+        ("static_sheet.tilt_degrees", "30.0"),
+        ("static_sheet.albedo", "[0.5, 0.25, 1.0]"),
+        ("static_sheet.segments", "4"),
+    ];
+
+    /// `[section]\nkey = value` for a dotted key.
+    fn one_key(path: &str, value: &str) -> String {
+        let (section, key) = path.rsplit_once('.').unwrap();
+        format!("[{section}]\n{key} = {value}\n")
+    }
+
+    #[test]
+    fn every_key_is_accepted_and_lands_in_the_scene() {
+        for (path, value) in EVERY_KEY {
+            let text = one_key(path, value);
+            let scene = parse(&text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            let written: toml::Table = toml::from_str(&scene.to_toml()).unwrap();
+            let expected: toml::Table = toml::from_str(&format!("v = {value}")).unwrap();
+            assert_eq!(lookup(&written, path), Some(&expected["v"]), "{text}");
+            let default: toml::Table = toml::from_str(
+                &Scene {
+                    static_sheet: Some(StaticSheet::default()),
+                    ..Scene::default()
+                }
+                .to_toml(),
+            )
+            .unwrap();
+            assert_ne!(lookup(&default, path), Some(&expected["v"]), "{path}");
+        }
+    }
+
+    #[test]
+    fn the_key_table_covers_every_key_of_the_scene() {
+        // A scene with every optional part present, so that every key is written out.
+        let full = Scene {
+            static_sheet: Some(StaticSheet::default()),
+            shading: ShadingSection {
+                thickness_texture: Some("weave.png".into()),
+                ..ShadingSection::default()
+            },
+            ..Scene::default()
+        };
+        let table: toml::Table = toml::from_str(&full.to_toml()).unwrap();
+        let mut keys = Vec::new();
+        leaf_keys(&table, "", &mut keys);
+        let tested: Vec<&str> = EVERY_KEY.iter().map(|(path, _)| *path).collect();
+        for key in &keys {
+            if !key.starts_with("simulation.method.") {
+                assert!(tested.contains(&key.as_str()), "key `{key}` is not tested");
+            }
+        }
+        for path in tested {
+            assert!(keys.iter().any(|k| k == path), "`{path}` is not a key");
+        }
+    }
+
+    #[test]
+    fn every_method_kind_takes_its_knobs() {
+        use sheer_cloth::Method;
+        for (text, expected) in [
+            (
+                "kind = \"explicit_euler\"\nsubsteps = 1600",
+                Method::ExplicitEuler { substeps: 1600 },
+            ),
+            (
+                "kind = \"symplectic_euler\"\nsubsteps = 200",
+                Method::SymplecticEuler { substeps: 200 },
+            ),
+            (
+                "kind = \"verlet\"\nsubsteps = 150",
+                Method::Verlet { substeps: 150 },
+            ),
+            (
+                "kind = \"implicit_euler\"\nsubsteps = 2\ncg_max_iterations = 50\ncg_tolerance = 1e-5",
+                Method::ImplicitEuler {
+                    substeps: 2,
+                    cg_max_iterations: 50,
+                    cg_tolerance: 1e-5,
+                },
+            ),
+            (
+                "kind = \"pbd\"\nsubsteps = 4\niterations = 12\nstiffness = 0.5",
+                Method::Pbd {
+                    substeps: 4,
+                    iterations: 12,
+                    stiffness: 0.5,
+                },
+            ),
+            (
+                "kind = \"xpbd\"\nsubsteps = 3\niterations = 15",
+                Method::Xpbd {
+                    substeps: 3,
+                    iterations: 15,
+                },
+            ),
+            (
+                "kind = \"small_steps_xpbd\"\nsubsteps = 30",
+                Method::SmallStepsXpbd { substeps: 30 },
+            ),
+        ] {
+            let scene = parse(&format!("[simulation.method]\n{text}")).unwrap();
+            assert_eq!(scene.simulation.method, expected, "{text}");
+        }
+    }
+
+    /// Asserts that `text` is refused with one line that contains every needle.
+    fn assert_refused(text: &str, needles: &[&str]) {
+        let error = match parse(text) {
+            Ok(_) => panic!("accepted: {text}"),
+            Err(error) => error,
+        };
+        assert_eq!(error.lines().count(), 1, "{text}: {error}");
+        for needle in needles {
+            assert!(error.contains(needle), "{text}: `{error}` lacks `{needle}`");
+        }
+    }
+
+    #[test]
+    fn nan_and_infinite_values_are_errors_naming_the_key() {
+        // X stands for nan, inf and -inf in turn.
+        for (template, key) in [
+            ("[flag]\nwidth = X", "flag.width"),
+            ("[flag]\nheight = X", "flag.height"),
+            ("[flag]\nareal_density = X", "flag.areal_density"),
+            ("[flag]\norigin = [0.0, X, 0.0]", "flag.origin"),
+            (
+                "[simulation]\ngravity = [0.0, X, 0.0]",
+                "simulation.gravity",
+            ),
+            ("[simulation]\nair_damping = X", "simulation.air_damping"),
+            (
+                "[simulation.method]\nkind = \"implicit_euler\"\nsubsteps = 1\ncg_max_iterations = 9\ncg_tolerance = X",
+                "simulation.method.cg_tolerance",
+            ),
+            (
+                "[simulation.method]\nkind = \"pbd\"\nsubsteps = 1\niterations = 9\nstiffness = X",
+                "simulation.method.stiffness",
+            ),
+            (
+                "[simulation.stretch]\nstiffness = X",
+                "simulation.stretch.stiffness",
+            ),
+            (
+                "[simulation.stretch]\ndamping = X",
+                "simulation.stretch.damping",
+            ),
+            (
+                "[simulation.shear]\nstiffness = X",
+                "simulation.shear.stiffness",
+            ),
+            (
+                "[simulation.shear]\ndamping = X",
+                "simulation.shear.damping",
+            ),
+            (
+                "[simulation.bend]\nstiffness = X",
+                "simulation.bend.stiffness",
+            ),
+            ("[simulation.bend]\ndamping = X", "simulation.bend.damping"),
+            (
+                "[simulation.wind]\nvelocity = [X, 0.0, 0.0]",
+                "simulation.wind.velocity",
+            ),
+            (
+                "[simulation.wind]\nair_density = X",
+                "simulation.wind.air_density",
+            ),
+            (
+                "[simulation.wind]\ndrag_coefficient = X",
+                "simulation.wind.drag_coefficient",
+            ),
+            (
+                "[simulation.wind]\nlift_coefficient = X",
+                "simulation.wind.lift_coefficient",
+            ),
+            (
+                "[simulation.wind]\ngust_strength = X",
+                "simulation.wind.gust_strength",
+            ),
+            (
+                "[simulation.wind]\nturbulence = X",
+                "simulation.wind.turbulence",
+            ),
+            (
+                "[simulation.wind]\ngust_frequency = X",
+                "simulation.wind.gust_frequency",
+            ),
+            (
+                "[simulation.divergence]\nmax_speed = X",
+                "simulation.divergence.max_speed",
+            ),
+            (
+                "[simulation.divergence]\nmax_strain = X",
+                "simulation.divergence.max_strain",
+            ),
+            (
+                "[shading]\noptical_thickness = [2.0, X, 2.0]",
+                "shading.optical_thickness",
+            ),
+            (
+                "[shading]\nalbedo_scale = [X, 1.0, 1.0]",
+                "shading.albedo_scale",
+            ),
+            ("[shading]\nbaseline_alpha = X", "shading.baseline_alpha"),
+            ("[shading]\nexposure = X", "shading.exposure"),
+            ("[light]\nflux = X", "light.flux"),
+            ("[light]\ncentre = [0.0, 0.0, X]", "light.centre"),
+            ("[light]\nradius = X", "light.radius"),
+            ("[light]\nperiod = X", "light.period"),
+            ("[light]\nphase = X", "light.phase"),
+            ("[camera]\nposition = [X, 0.0, 2.0]", "camera.position"),
+            ("[camera]\ntarget = [0.0, X, 0.0]", "camera.target"),
+            (
+                "[camera]\nvertical_fov_degrees = X",
+                "camera.vertical_fov_degrees",
+            ),
+            ("[background]\ncolour = [0.2, 0.2, X]", "background.colour"),
+            (
+                "[background]\nradiance_scale = X",
+                "background.radiance_scale",
+            ),
+            ("[render]\nfps = X", "render.fps"),
+            ("[render]\nwarmup = X", "render.warmup"),
+            (
+                "[static_sheet]\ncentre = [X, 0.0, 0.0]",
+                "static_sheet.centre",
+            ),
+            ("[static_sheet]\nsize = [1.0, X]", "static_sheet.size"),
+            (
+                "[static_sheet]\ntilt_degrees = X",
+                "static_sheet.tilt_degrees",
+            ),
+            (
+                "[static_sheet]\nalbedo = [X, 0.5, 0.5]",
+                "static_sheet.albedo",
+            ),
+        ] {
+            for special in ["nan", "inf", "-inf"] {
+                assert_refused(&template.replace('X', special), &[key]);
+            }
+        }
+    }
+
+    #[test]
+    fn out_of_range_values_are_errors_naming_the_key() {
+        let implicit = "[simulation.method]\nkind = \"implicit_euler\"\nsubsteps = 1\n";
+        let pbd = "[simulation.method]\nkind = \"pbd\"\nsubsteps = 1\n";
+        for (text, key) in [
+            ("[flag]\ncolumns = 1".to_string(), "flag.columns"),
+            ("[flag]\ncolumns = 1025".into(), "flag.columns"),
+            // Found by the audit: this grid aborted the program on allocation failure.
+            (
+                "[flag]\ncolumns = 100000\nrows = 100000".into(),
+                "flag.columns",
+            ),
+            ("[flag]\nrows = 1".into(), "flag.rows"),
+            ("[flag]\nrows = 5000".into(), "flag.rows"),
+            ("[flag]\nwidth = 0.0".into(), "flag.width"),
+            ("[flag]\nwidth = 101.0".into(), "flag.width"),
+            ("[flag]\nheight = -1.0".into(), "flag.height"),
+            ("[flag]\nareal_density = 0.0".into(), "flag.areal_density"),
+            ("[flag]\norigin = [2e4, 0.0, 0.0]".into(), "flag.origin"),
+            (
+                "[simulation]\nair_damping = -1.0".into(),
+                "simulation.air_damping",
+            ),
+            (
+                "[simulation.method]\nkind = \"verlet\"\nsubsteps = 0".into(),
+                "simulation.method.substeps",
+            ),
+            (
+                "[simulation.method]\nkind = \"verlet\"\nsubsteps = 100001".into(),
+                "simulation.method.substeps",
+            ),
+            (
+                format!("{implicit}cg_max_iterations = 0\ncg_tolerance = 1e-6"),
+                "simulation.method.cg_max_iterations",
+            ),
+            (
+                format!("{implicit}cg_max_iterations = 10001\ncg_tolerance = 1e-6"),
+                "simulation.method.cg_max_iterations",
+            ),
+            (
+                format!("{implicit}cg_max_iterations = 10\ncg_tolerance = 0.0"),
+                "simulation.method.cg_tolerance",
+            ),
+            (
+                format!("{pbd}iterations = 0\nstiffness = 1.0"),
+                "simulation.method.iterations",
+            ),
+            (
+                format!("{pbd}iterations = 10001\nstiffness = 1.0"),
+                "simulation.method.iterations",
+            ),
+            (
+                format!("{pbd}iterations = 4\nstiffness = 1.5"),
+                "simulation.method.stiffness",
+            ),
+            (
+                format!("{pbd}iterations = 4\nstiffness = 0.0"),
+                "simulation.method.stiffness",
+            ),
+            (
+                "[simulation.method]\nkind = \"xpbd\"\nsubsteps = 1\niterations = 0".into(),
+                "simulation.method.iterations",
+            ),
+            (
+                "[simulation.stretch]\nstiffness = 0.0".into(),
+                "simulation.stretch.stiffness",
+            ),
+            (
+                "[simulation.stretch]\ndamping = -1.0".into(),
+                "simulation.stretch.damping",
+            ),
+            (
+                "[simulation.shear]\nstiffness = -5.0".into(),
+                "simulation.shear.stiffness",
+            ),
+            (
+                "[simulation.shear]\ndamping = -1.0".into(),
+                "simulation.shear.damping",
+            ),
+            (
+                "[simulation.bend]\nstiffness = 0.0".into(),
+                "simulation.bend.stiffness",
+            ),
+            (
+                "[simulation.bend]\ndamping = -0.5".into(),
+                "simulation.bend.damping",
+            ),
+            (
+                "[simulation.wind]\nair_density = -1.0".into(),
+                "simulation.wind.air_density",
+            ),
+            (
+                "[simulation.wind]\ndrag_coefficient = -1.0".into(),
+                "simulation.wind.drag_coefficient",
+            ),
+            (
+                "[simulation.wind]\nlift_coefficient = -1.0".into(),
+                "simulation.wind.lift_coefficient",
+            ),
+            (
+                "[simulation.wind]\ngust_strength = -1.0".into(),
+                "simulation.wind.gust_strength",
+            ),
+            (
+                "[simulation.wind]\nturbulence = -1.0".into(),
+                "simulation.wind.turbulence",
+            ),
+            (
+                "[simulation.wind]\ngust_frequency = 0.0".into(),
+                "simulation.wind.gust_frequency",
+            ),
+            (
+                "[simulation.divergence]\nmax_speed = 0.0".into(),
+                "simulation.divergence.max_speed",
+            ),
+            (
+                "[simulation.divergence]\nmax_strain = -1.0".into(),
+                "simulation.divergence.max_strain",
+            ),
+            (
+                "[shading]\noptical_thickness = [0.0, 1.0, 1.0]".into(),
+                "shading.optical_thickness",
+            ),
+            (
+                "[shading]\nalbedo_scale = [1.5, 1.0, 1.0]".into(),
+                "shading.albedo_scale",
+            ),
+            (
+                "[shading]\nalbedo_scale = [1.0, -0.5, 1.0]".into(),
+                "shading.albedo_scale",
+            ),
+            (
+                "[shading]\nbaseline_alpha = 2.0".into(),
+                "shading.baseline_alpha",
+            ),
+            (
+                "[shading]\nbaseline_alpha = -0.1".into(),
+                "shading.baseline_alpha",
+            ),
+            ("[shading]\nexposure = 0.0".into(), "shading.exposure"),
+            ("[shading]\nexposure = 2e6".into(), "shading.exposure"),
+            ("[light]\nflux = -1.0".into(), "light.flux"),
+            // Found by the audit: this flux wrote infinite pixels into the EXR.
+            ("[light]\nflux = 3e38".into(), "light.flux"),
+            ("[light]\nflux = 2e6".into(), "light.flux"),
+            ("[light]\ncentre = [0.0, -2e4, 0.0]".into(), "light.centre"),
+            ("[light]\nradius = 0.0".into(), "light.radius"),
+            ("[light]\nradius = 2e4".into(), "light.radius"),
+            (
+                "[camera]\nposition = [0.0, 0.0, 2e4]".into(),
+                "camera.position",
+            ),
+            (
+                "[camera]\ntarget = [0.75, 0.25, 2.4]".into(),
+                "camera.target",
+            ),
+            (
+                "[camera]\nvertical_fov_degrees = 1.0".into(),
+                "camera.vertical_fov_degrees",
+            ),
+            (
+                "[camera]\nvertical_fov_degrees = 180.0".into(),
+                "camera.vertical_fov_degrees",
+            ),
+            (
+                "[background]\ncolour = [-1.0, 0.0, 0.0]".into(),
+                "background.colour",
+            ),
+            (
+                "[background]\ncolour = [2e6, 0.0, 0.0]".into(),
+                "background.colour",
+            ),
+            (
+                "[background]\nradiance_scale = -1.0".into(),
+                "background.radiance_scale",
+            ),
+            (
+                "[background]\nradiance_scale = 2e6".into(),
+                "background.radiance_scale",
+            ),
+            ("[render]\nwidth = 4".into(), "render.width"),
+            ("[render]\nwidth = 9000".into(), "render.width"),
+            ("[render]\nheight = 8".into(), "render.height"),
+            ("[render]\nheight = 10000".into(), "render.height"),
+            ("[render]\nfps = 0.0".into(), "render.fps"),
+            ("[render]\nfps = 0.5".into(), "render.fps"),
+            ("[render]\nfps = 2000.0".into(), "render.fps"),
+            // Found by the audit: 1e30 frames per second looped for billions of steps.
+            ("[render]\nfps = 1e30".into(), "render.fps"),
+            ("[render]\nwarmup = -1.0".into(), "render.warmup"),
+            ("[render]\nwarmup = 601.0".into(), "render.warmup"),
+            (
+                "[static_sheet]\ncentre = [2e4, 0.0, 0.0]".into(),
+                "static_sheet.centre",
+            ),
+            (
+                "[static_sheet]\nsize = [0.0, 1.0]".into(),
+                "static_sheet.size",
+            ),
+            (
+                "[static_sheet]\nsize = [2e4, 1.0]".into(),
+                "static_sheet.size",
+            ),
+            (
+                "[static_sheet]\nalbedo = [1.0, -1.0, 1.0]".into(),
+                "static_sheet.albedo",
+            ),
+            (
+                "[static_sheet]\nalbedo = [1.5, 1.0, 1.0]".into(),
+                "static_sheet.albedo",
+            ),
+            (
+                "[static_sheet]\nsegments = 0".into(),
+                "static_sheet.segments",
+            ),
+            (
+                "[static_sheet]\nsegments = 1025".into(),
+                "static_sheet.segments",
+            ),
+        ] {
+            assert_refused(&text, &[key]);
+        }
+    }
+
+    #[test]
+    fn a_camera_looking_along_the_up_axis_is_refused() {
+        // Straight up, straight down, and 0.1° off vertical: the view has no "up" and nothing is drawn.
+        for (position, target) in [
+            ("[0.0, 0.0, 0.0]", "[0.0, 5.0, 0.0]"),
+            ("[0.5, 3.0, 0.5]", "[0.5, 0.0, 0.5]"),
+            ("[0.0, 0.0, 0.0]", "[0.00873, 5.0, 0.0]"),
+        ] {
+            assert_refused(
+                &format!("[camera]\nposition = {position}\ntarget = {target}"),
+                &["camera.target", "up axis"],
+            );
+        }
+        // Steep but not vertical is fine (the window's orbit stops at 80°).
+        assert!(parse("[camera]\nposition = [0.0, 5.0, 0.9]\ntarget = [0.0, 0.0, 0.0]").is_ok());
+    }
+
+    #[test]
+    fn malformed_values_are_errors_naming_the_key_and_line() {
+        for (text, needles) in [
+            // Wrong array lengths.
+            ("[flag]\norigin = [0.0, 0.8]", &["origin", "line 2"][..]),
+            (
+                "[simulation]\ngravity = [0.0, -9.81]",
+                &["gravity", "line 2"],
+            ),
+            (
+                "[simulation.wind]\nvelocity = [1.0, 2.0, 3.0, 4.0]",
+                &["velocity", "line 2"],
+            ),
+            (
+                "[shading]\noptical_thickness = [2.0, 2.0]",
+                &["optical_thickness", "line 2"],
+            ),
+            (
+                "[shading]\nalbedo_scale = [1.0, 1.0, 1.0, 1.0]",
+                &["albedo_scale", "line 2"],
+            ),
+            ("[light]\ncentre = [0.0]", &["centre", "line 2"]),
+            ("[camera]\nposition = []", &["position", "line 2"]),
+            ("[background]\ncolour = [0.2, 0.2]", &["colour", "line 2"]),
+            ("[static_sheet]\nsize = [1.0]", &["size", "line 2"]),
+            ("[static_sheet]\nalbedo = [1.0, 1.0]", &["albedo", "line 2"]),
+            // Wrong types.
+            ("[flag]\ncolumns = \"big\"", &["columns", "line 2"]),
+            ("[flag]\ncolumns = 2.5", &["columns", "line 2"]),
+            ("[flag]\ncolumns = -3", &["columns", "line 2"]),
+            (
+                "[simulation]\nlong_range_attachments = \"yes\"",
+                &["long_range_attachments", "line 2"],
+            ),
+            (
+                "[simulation]\nparallel_min_particles = -1",
+                &["parallel_min_particles", "line 2"],
+            ),
+            ("[simulation.wind]\nseed = -1", &["seed", "line 2"]),
+            (
+                "[simulation.wind]\nper_substep = 1",
+                &["per_substep", "line 2"],
+            ),
+            (
+                "[simulation.stretch]\nenabled = \"no\"",
+                &["enabled", "line 2"],
+            ),
+            (
+                "[shading]\nalbedo_texture = 3",
+                &["albedo_texture", "line 2"],
+            ),
+            ("[light]\nmarker = 1", &["marker", "line 2"]),
+            ("[render]\nwidth = \"big\"", &["width", "line 2"]),
+            ("[render]\nheight = -512", &["height", "line 2"]),
+            ("[static_sheet]\nsegments = 1.5", &["segments", "line 2"]),
+            ("flag = 3", &["flag", "line 1"]),
+            // Bad enum strings.
+            (
+                "[shading]\nmodel = \"phong\"",
+                &["phong", "model", "line 2"],
+            ),
+            ("[shading]\npath = \"gpu\"", &["gpu", "path", "line 2"]),
+            (
+                "[shading]\nconvention = \"literal\"",
+                &["literal", "convention", "line 2"],
+            ),
+            (
+                "[shading]\nscattering = \"double\"",
+                &["double", "scattering", "line 2"],
+            ),
+            (
+                "[simulation.method]\nkind = \"rk4\"\nsubsteps = 1",
+                &["rk4", "kind"],
+            ),
+            // Missing method knobs, and a knob the method does not have.
+            (
+                "[simulation.method]\nkind = \"pbd\"\nsubsteps = 2\niterations = 4",
+                &["stiffness"],
+            ),
+            (
+                "[simulation.method]\nkind = \"implicit_euler\"\nsubsteps = 1\ncg_tolerance = 1e-6",
+                &["cg_max_iterations"],
+            ),
+            ("[simulation.method]\nkind = \"verlet\"", &["substeps"]),
+            ("[simulation.method]\nsubsteps = 3", &["kind"]),
+            (
+                "[simulation.method]\nkind = \"verlet\"\nsubsteps = 3\niterations = 4",
+                &["iterations"],
+            ),
+            // Duplicate keys and tables.
+            ("[light]\nflux = 1.0\nflux = 2.0", &["flux", "line 3"]),
+            (
+                "[render]\nwidth = 64\n[render]\nheight = 64",
+                &["render", "line 3"],
+            ),
+            // Not TOML at all.
+            ("this is not toml", &["line 1"]),
+        ] {
+            assert_refused(text, needles);
+        }
+    }
+
+    #[test]
+    fn unknown_keys_in_every_section_are_errors_naming_the_key() {
+        for section in [
+            "",
+            "[flag]",
+            "[simulation]",
+            "[simulation.method]\nkind = \"verlet\"\nsubsteps = 3",
+            "[simulation.stretch]",
+            "[simulation.shear]",
+            "[simulation.bend]",
+            "[simulation.wind]",
+            "[simulation.divergence]",
+            "[shading]",
+            "[light]",
+            "[camera]",
+            "[background]",
+            "[render]",
+            "[static_sheet]",
+        ] {
+            let text = format!("{section}\nbogus_key = 1");
+            assert_refused(&text, &["bogus_key"]);
+        }
+    }
+
+    #[test]
+    fn the_built_in_default_scene_is_the_shipped_file_with_its_images() {
+        let scene = Scene::builtin_default().unwrap();
+        assert_eq!(scene, Scene::default());
+        // The images it names are built in, identical to the files in assets/.
+        for key_and_name in [
+            ("shading.albedo_texture", &scene.shading.albedo_texture),
+            ("background.image", &scene.background.image),
+        ] {
+            let (key, Some(name)) = key_and_name else {
+                panic!("{key_and_name:?}")
+            };
+            let bytes = scene.read_asset(key, name).unwrap();
+            assert_eq!(&*bytes, std::fs::read(assets().join(name)).unwrap());
+        }
+        // Whatever the current directory: it reads no file.
+        let error = scene
+            .read_asset("shading.thickness_texture", "weave.png")
+            .unwrap_err();
+        assert!(
+            error.to_string().contains("shading.thickness_texture"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn missing_and_corrupt_images_are_errors_naming_the_key() {
+        let dir = std::env::temp_dir().join(format!("sheer-key-tests-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("corrupt.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
+        let scene = Scene::from_toml("", &dir).unwrap();
+        for key in [
+            "shading.albedo_texture",
+            "shading.thickness_texture",
+            "background.image",
+        ] {
+            for (name, why) in [
+                ("missing.png", "cannot read"),
+                ("corrupt.png", "cannot decode"),
+            ] {
+                let error = crate::frame::load_linear_texture(&scene, key, name, None)
+                    .err()
+                    .unwrap_or_else(|| panic!("{key} = {name} accepted"))
+                    .to_string();
+                assert!(
+                    error.contains(key) && error.contains(name) && error.contains(why),
+                    "{error}"
+                );
+                assert_eq!(error.lines().count(), 1, "{error}");
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -16,7 +16,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Number of frames to simulate and write (1/fps seconds each).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
     pub frames: u32,
     /// Directory for frame_0000.obj, frame_0001.obj, … (created if missing).
     #[arg(long)]

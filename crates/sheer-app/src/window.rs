@@ -12,7 +12,7 @@ use sheer_cloth::Method;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{EvaluationPathName, Scene, ShadingModel};
+use crate::scene::{EvaluationPathName, Scattering, Scene, ShadingModel};
 
 /// Options of the window from the command line.
 #[derive(Debug, Clone, Default)]
@@ -80,6 +80,63 @@ fn in_range(low: f64, high: f64) -> impl Fn(f64) -> Result<(), String> {
     }
 }
 
+/// A count: a whole number in [low, high] (2.7 is refused, not truncated to 2).
+fn whole_in_range(low: f64, high: f64) -> impl Fn(f64) -> Result<(), String> {
+    move |v| {
+        if v.fract() == 0.0 && v >= low && v <= high {
+            Ok(())
+        } else {
+            Err(format!(
+                "refused: must be a whole number in [{low}, {high}]"
+            ))
+        }
+    }
+}
+
+/// A knob of the simulation method, as edited in the panel.
+#[derive(Clone, Copy, Debug)]
+enum MethodKnob {
+    Substeps(u32),
+    /// Solver iterations (PBD, XPBD) or the CG iteration cap (implicit Euler).
+    Iterations(u32),
+    PbdStiffness(f64),
+    CgTolerance(f64),
+}
+
+/// `method` with only `knob` changed: its other knobs (PBD stiffness, the CG cap and tolerance) keep
+/// their values. A knob the method does not have leaves it unchanged.
+fn with_knob(method: Method, knob: MethodKnob) -> Method {
+    match (knob, method) {
+        (MethodKnob::Substeps(n), _) => crate::bench_sim::with_knobs(method, Some(n), None),
+        (MethodKnob::Iterations(n), _) => crate::bench_sim::with_knobs(method, None, Some(n)),
+        (
+            MethodKnob::PbdStiffness(stiffness),
+            Method::Pbd {
+                substeps,
+                iterations,
+                ..
+            },
+        ) => Method::Pbd {
+            substeps,
+            iterations,
+            stiffness,
+        },
+        (
+            MethodKnob::CgTolerance(cg_tolerance),
+            Method::ImplicitEuler {
+                substeps,
+                cg_max_iterations,
+                ..
+            },
+        ) => Method::ImplicitEuler {
+            substeps,
+            cg_max_iterations,
+            cg_tolerance,
+        },
+        _ => method,
+    }
+}
+
 struct Fields {
     optical_thickness: NumberField,
     albedo_scale: NumberField,
@@ -91,7 +148,36 @@ struct Fields {
     gusts: NumberField,
     substeps: NumberField,
     iterations: NumberField,
+    pbd_stiffness: NumberField,
+    cg_tolerance: NumberField,
     columns: NumberField,
+}
+
+impl Fields {
+    /// Shows `method`'s knobs in their fields (after a change of method, or of one knob).
+    fn show_method(&mut self, method: Method) {
+        self.substeps.text = method.substeps().to_string();
+        self.iterations.text = method.iterations().to_string();
+        self.iterations.label = match method {
+            Method::ImplicitEuler { .. } => "CG max iterations",
+            _ => "iterations",
+        };
+        match method {
+            Method::Pbd { stiffness, .. } => self.pbd_stiffness.text = stiffness.to_string(),
+            Method::ImplicitEuler { cg_tolerance, .. } => {
+                self.cg_tolerance.text = cg_tolerance.to_string()
+            }
+            _ => {}
+        }
+        for field in [
+            &mut self.substeps,
+            &mut self.iterations,
+            &mut self.pbd_stiffness,
+            &mut self.cg_tolerance,
+        ] {
+            field.error = None;
+        }
+    }
 }
 
 pub struct SheerApp {
@@ -129,7 +215,7 @@ impl SheerApp {
         let orbit = orbit_of(&scene);
         let wind = scene.simulation.wind;
         let speed = wind.velocity.length();
-        let fields = Fields {
+        let mut fields = Fields {
             optical_thickness: NumberField::new(
                 "τ₁",
                 f64::from(scene.shading.optical_thickness[0]),
@@ -149,8 +235,11 @@ impl SheerApp {
                 "iterations",
                 f64::from(scene.simulation.method.iterations()),
             ),
+            pbd_stiffness: NumberField::new("PBD stiffness", 1.0),
+            cg_tolerance: NumberField::new("CG tolerance", 1e-4),
             columns: NumberField::new("grid columns", scene.flag.columns as f64),
         };
+        fields.show_method(scene.simulation.method);
         Ok(SheerApp {
             flag,
             renderer,
@@ -182,9 +271,10 @@ impl SheerApp {
         self.flag.scene.camera.position = (target + offset).to_array();
     }
 
-    /// Rebuilds the flag with the scene's current grid and parameters.
-    fn rebuild(&mut self) {
-        match FlagScene::new(self.flag.scene.clone()) {
+    /// Rebuilds the flag for `scene` (a new grid); a scene that fails validation is refused and the
+    /// running flag kept.
+    fn rebuild(&mut self, scene: Scene) {
+        match scene.validate().and_then(|()| FlagScene::new(scene)) {
             Ok(flag) => self.flag = flag,
             Err(e) => self.notice = Some(format!("rebuild refused: {e}")),
         }
@@ -235,6 +325,7 @@ impl SheerApp {
         ui.label("Thin cloth as a thin slab (Frisvad et al. 2005)");
         ui.separator();
         let mut shading_changed = false;
+        let scattering_before = self.flag.scene.shading.scattering;
         egui::CollapsingHeader::new("Shading")
             .default_open(true)
             .show(ui, |ui| {
@@ -249,6 +340,13 @@ impl SheerApp {
                     ui.selectable_value(&mut s.path, EvaluationPathName::Fragment, "fragment");
                     ui.selectable_value(&mut s.path, EvaluationPathName::Vertex, "vertex");
                     ui.selectable_value(&mut s.path, EvaluationPathName::Cpu, "CPU");
+                });
+                ui.horizontal(|ui| {
+                    ui.label("scattering");
+                    let before = s.scattering;
+                    ui.selectable_value(&mut s.scattering, Scattering::Single, "single");
+                    ui.selectable_value(&mut s.scattering, Scattering::AllOrders, "all orders");
+                    shading_changed |= s.scattering != before;
                 });
                 if let Some(v) = self.fields.optical_thickness.show(ui, in_range(1e-3, 50.0)) {
                     s.optical_thickness = [v as f32; 3];
@@ -318,43 +416,57 @@ impl SheerApp {
             egui::ComboBox::from_label("method")
                 .selected_text(current)
                 .show_ui(ui, |ui| {
-                    for name in crate::bench_sim::METHOD_NAMES {
+                    for name in Method::NAMES {
                         ui.selectable_value(&mut chosen, name, name);
                     }
                 });
             let mut method = params.method;
             if chosen != current
-                && let Some(setting) = crate::bench_sim::stable_setting(chosen)
+                && let Some(setting) = Method::stable_flag_setting(chosen)
             {
                 method = setting;
             }
-            let mut substeps = method.substeps();
-            let mut iterations = method.iterations();
-            if let Some(v) = self.fields.substeps.show(ui, in_range(1.0, 2000.0)) {
-                substeps = v as u32;
+            // Each field changes only its own knob of the method.
+            if let Some(v) = self.fields.substeps.show(ui, whole_in_range(1.0, 2000.0)) {
+                method = with_knob(method, MethodKnob::Substeps(v as u32));
             }
-            if let Some(v) = self.fields.iterations.show(ui, in_range(1.0, 1000.0)) {
-                iterations = v as u32;
+            if matches!(
+                method,
+                Method::Pbd { .. } | Method::Xpbd { .. } | Method::ImplicitEuler { .. }
+            ) && let Some(v) = self.fields.iterations.show(ui, whole_in_range(1.0, 1000.0))
+            {
+                method = with_knob(method, MethodKnob::Iterations(v as u32));
             }
-            if substeps != method.substeps() || iterations != method.iterations() {
-                method = Method::from_name(method.name(), substeps, iterations).unwrap_or(method);
+            if matches!(method, Method::Pbd { .. })
+                && let Some(v) = self.fields.pbd_stiffness.show(ui, |v| {
+                    if v > 0.0 && v <= 1.0 {
+                        Ok(())
+                    } else {
+                        Err("refused: must lie in (0, 1]".to_string())
+                    }
+                })
+            {
+                method = with_knob(method, MethodKnob::PbdStiffness(v));
+            }
+            if matches!(method, Method::ImplicitEuler { .. })
+                && let Some(v) = self.fields.cg_tolerance.show(ui, in_range(1e-12, 1.0))
+            {
+                method = with_knob(method, MethodKnob::CgTolerance(v));
             }
             if method != params.method {
                 params.method = method;
-                self.fields.substeps.text = method.substeps().to_string();
-                self.fields.iterations.text = method.iterations().to_string();
+                self.fields.show_method(method);
                 if let Err(e) = self.flag.set_simulation_params(params) {
                     self.notice = Some(e.to_string());
                 }
             }
-            if let Some(v) = self.fields.columns.show(ui, in_range(2.0, 512.0)) {
-                let columns = v as usize;
-                // Keep the flag's 8:11 cells square.
-                let flag = &mut self.flag.scene.flag;
-                flag.columns = columns;
-                flag.rows =
-                    ((columns as f64 - 1.0) * flag.height / flag.width).round() as usize + 1;
-                self.rebuild();
+            if let Some(v) = self.fields.columns.show(ui, whole_in_range(2.0, 512.0)) {
+                let mut scene = self.flag.scene.clone();
+                // Keep the flag's cells square (the Faroe flag's 8:11 at the default size).
+                let flag = &mut scene.flag;
+                flag.columns = v as usize;
+                flag.rows = ((v - 1.0) * flag.height / flag.width).round().max(1.0) as usize + 1;
+                self.rebuild(scene);
             }
             ui.horizontal(|ui| {
                 if ui
@@ -375,6 +487,8 @@ impl SheerApp {
             });
         });
         if shading_changed && let Err(e) = self.renderer.update_shading(&self.flag.scene) {
+            // The renderer keeps its last good parameters, and the panel its scattering choice.
+            self.flag.scene.shading.scattering = scattering_before;
             self.notice = Some(e.to_string());
         }
         ui.separator();
@@ -400,11 +514,14 @@ impl SheerApp {
             "{:.1} frames/s ({mean:.1} ms)",
             1e3 / mean.max(1e-3)
         ));
+        // Shading's CPU side (per-path evaluation, staging the uploads, encoding) apart from the
+        // GPU's (submit to finish, the uploads' copies included).
         ui.monospace(format!(
-            "simulation {:6.2} ms\nnormals    {:6.2} ms\nshading+GPU{:6.2} ms\nread-back  {:6.2} ms",
+            "simulation   {:6.2} ms\nnormals      {:6.2} ms\nshading, CPU {:6.2} ms\nGPU          {:6.2} ms\nread-back    {:6.2} ms",
             ms(self.times.simulation),
             ms(self.times.normals),
-            ms(self.times.shading),
+            ms(self.times.shading.saturating_sub(self.times.gpu)),
+            ms(self.times.gpu),
             ms(self.times.readback)
         ));
         ui.small(format!("adapter: {}", self.renderer.adapter()));
@@ -535,4 +652,78 @@ pub fn run(options: WindowOptions) -> Result<(), CliError> {
     };
     eframe::run_native("sheer", native, Box::new(|_| Ok(Box::new(app))))
         .map_err(|e| CliError::new(format!("window: {e}")))
+}
+
+#[cfg(test)]
+mod panel_tests {
+    use super::*;
+
+    #[test]
+    fn counts_typed_into_the_panel_must_be_whole_numbers() {
+        let check = whole_in_range(1.0, 2000.0);
+        assert!(check(3.0).is_ok());
+        for refused in [2.7, 0.0, 2001.0, -4.0] {
+            let message = check(refused).unwrap_err();
+            assert!(message.starts_with("refused:"), "{refused}: {message}");
+        }
+    }
+
+    #[test]
+    fn editing_one_method_knob_keeps_the_others() {
+        let pbd = Method::Pbd {
+            substeps: 4,
+            iterations: 10,
+            stiffness: 0.7,
+        };
+        assert_eq!(
+            with_knob(pbd, MethodKnob::Substeps(8)),
+            Method::Pbd {
+                substeps: 8,
+                iterations: 10,
+                stiffness: 0.7
+            }
+        );
+        assert_eq!(
+            with_knob(pbd, MethodKnob::PbdStiffness(0.25)),
+            Method::Pbd {
+                substeps: 4,
+                iterations: 10,
+                stiffness: 0.25
+            }
+        );
+        let implicit = Method::ImplicitEuler {
+            substeps: 1,
+            cg_max_iterations: 100,
+            cg_tolerance: 1e-5,
+        };
+        // Twice the sub-steps, then back: the CG cap and tolerance are untouched by either edit.
+        let edited = with_knob(
+            with_knob(implicit, MethodKnob::Substeps(2)),
+            MethodKnob::Substeps(1),
+        );
+        assert_eq!(edited, implicit);
+        assert_eq!(
+            with_knob(implicit, MethodKnob::Iterations(40)),
+            Method::ImplicitEuler {
+                substeps: 1,
+                cg_max_iterations: 40,
+                cg_tolerance: 1e-5
+            }
+        );
+        assert_eq!(
+            with_knob(implicit, MethodKnob::CgTolerance(1e-8)),
+            Method::ImplicitEuler {
+                substeps: 1,
+                cg_max_iterations: 100,
+                cg_tolerance: 1e-8
+            }
+        );
+        // A knob the method does not have changes nothing.
+        let xpbd = Method::Xpbd {
+            substeps: 2,
+            iterations: 20,
+        };
+        assert_eq!(with_knob(xpbd, MethodKnob::PbdStiffness(0.5)), xpbd);
+        assert_eq!(with_knob(xpbd, MethodKnob::CgTolerance(1e-3)), xpbd);
+    }
 }

@@ -21,26 +21,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "{:<18} {:>9} {:>28} {:>12}",
         "method", "ms/frame", "fly-end corner (m)", "max strain"
     );
-    for method in [
-        Method::ExplicitEuler { substeps: 200 },
-        Method::SymplecticEuler { substeps: 200 },
-        Method::Verlet { substeps: 200 },
-        Method::ImplicitEuler {
-            substeps: 1,
-            cg_max_iterations: 100,
-            cg_tolerance: 1e-4,
-        },
-        Method::Pbd {
-            substeps: 4,
-            iterations: 10,
-            stiffness: 1.0,
-        },
-        Method::Xpbd {
-            substeps: 1,
-            iterations: 20,
-        },
-        Method::SmallStepsXpbd { substeps: 20 },
-    ] {
+    for method in Method::NAMES
+        .iter()
+        .filter_map(|name| Method::stable_flag_setting(name))
+    {
         let model = ClothModel::grid(&spec)?.with_hoist_pinned()?;
         let mut params = SimParams {
             method,

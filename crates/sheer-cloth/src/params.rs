@@ -171,8 +171,8 @@ impl Method {
 }
 
 impl Default for Method {
-    /// Small-steps XPBD with 20 sub-steps: the default flag's choice (see the crate README for the
-    /// measurements behind it).
+    /// Small-steps XPBD with 20 sub-steps: the study's automatic choice for the default flag
+    /// (`docs/choice.toml`, `docs/study.md`; the app tests that its default scene matches it).
     fn default() -> Self {
         Method::SmallStepsXpbd { substeps: 20 }
     }
@@ -208,10 +208,11 @@ impl SpringParams {
         }
     }
 
-    fn validate(&self, name: &'static str) -> Result<(), ParamError> {
+    /// Checks the family's knobs; the error names the field, `{family}.stiffness` or `{family}.damping`.
+    fn validate(&self, keys: [&'static str; 2]) -> Result<(), ParamError> {
         if self.enabled {
-            positive(name, self.stiffness)?;
-            non_negative(name, self.damping)?;
+            positive(keys[0], self.stiffness)?;
+            non_negative(keys[1], self.damping)?;
         }
         Ok(())
     }
@@ -376,9 +377,10 @@ impl SimParams {
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.method.validate()?;
-        self.stretch.validate("stretch")?;
-        self.shear.validate("shear")?;
-        self.bend.validate("bend")?;
+        self.stretch
+            .validate(["stretch.stiffness", "stretch.damping"])?;
+        self.shear.validate(["shear.stiffness", "shear.damping"])?;
+        self.bend.validate(["bend.stiffness", "bend.damping"])?;
         finite_vec("gravity", self.gravity)?;
         non_negative("air_damping", self.air_damping)?;
         self.wind.validate()?;
@@ -411,4 +413,86 @@ fn finite_vec(name: &'static str, value: DVec3) -> Result<(), ParamError> {
         }
     }
     Ok(())
+}
+
+impl Method {
+    /// Every method's name as [`Method::name`] prints it, in the order tables, charts and menus list
+    /// them (the force-based integrators from least to most stable, then the position-based ones).
+    pub const NAMES: [&'static str; 7] = [
+        "explicit_euler",
+        "symplectic_euler",
+        "verlet",
+        "implicit_euler",
+        "pbd",
+        "xpbd",
+        "small_steps_xpbd",
+    ];
+
+    /// The setting at which method `name` runs the default flag (64 × 46 particles, 60 Hz frames)
+    /// without diverging, measured by the study (`docs/study.md`, `docs/work-precision.csv`): the
+    /// explicit mass–spring methods need their sub-step below `2/ω_max` of the stiffest spring
+    /// (symplectic Euler and Verlet: 200 sub-steps; forward Euler, which only its damping keeps
+    /// bounded, 1600 — it diverges at 400); implicit Euler and the position-based methods are stable
+    /// at any step, so they get the cheapest settings the benches compare. `None` for an unknown name.
+    /// On finer grids the explicit methods need proportionally more sub-steps.
+    pub fn stable_flag_setting(name: &str) -> Option<Method> {
+        Some(match name {
+            "explicit_euler" => Method::ExplicitEuler { substeps: 1600 },
+            "symplectic_euler" => Method::SymplecticEuler { substeps: 200 },
+            "verlet" => Method::Verlet { substeps: 200 },
+            "implicit_euler" => Method::ImplicitEuler {
+                substeps: 1,
+                cg_max_iterations: 100,
+                cg_tolerance: 1e-4,
+            },
+            "pbd" => Method::Pbd {
+                substeps: 4,
+                iterations: 10,
+                stiffness: 1.0,
+            },
+            "xpbd" => Method::Xpbd {
+                substeps: 2,
+                iterations: 20,
+            },
+            "small_steps_xpbd" => Method::SmallStepsXpbd { substeps: 20 },
+            _ => return None,
+        })
+    }
+}
+
+impl SimParams {
+    /// The app's default waving flag (`assets/default.scene.toml`): the default fabric in a fresh
+    /// breeze of 5 m/s along the flag with 2.5 m/s across it (27° from its plane), gusting by half the
+    /// mean speed with lateral turbulence of 0.4 of it, long-range attachments on, integrated by
+    /// [`Method::default`] (the study's automatic choice, `docs/choice.toml`). The app's scene
+    /// defaults and the study's `default_flag` scene both start from this, so the choice is measured
+    /// on exactly the flag the app shows.
+    pub fn waving_flag() -> SimParams {
+        let mut params = SimParams::default();
+        params.wind.velocity = DVec3::new(5.0, 0.0, 2.5);
+        params.wind.gust_strength = 0.5;
+        params.wind.turbulence = 0.4;
+        params
+    }
+}
+
+#[cfg(test)]
+mod method_table_tests {
+    use super::*;
+
+    #[test]
+    fn every_name_has_a_stable_flag_setting_of_that_method() {
+        for name in Method::NAMES {
+            let method = Method::stable_flag_setting(name).unwrap();
+            assert_eq!(method.name(), name);
+            assert!(method.validate().is_ok(), "{name}");
+            assert_eq!(Method::from_name(name, 1, 1).map(|m| m.name()), Some(name));
+        }
+        assert_eq!(Method::stable_flag_setting("rk4"), None);
+        // NAMES lists every variant once.
+        let mut sorted = Method::NAMES.to_vec();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(sorted.len(), Method::all_with_substeps(1, 1).len());
+    }
 }

@@ -1,9 +1,10 @@
-//! Frames per second at 512×512 for the three thin-slab evaluation paths and the baseline (Frisvad et al.
-//! 2005 §4: fragment 300 fps, vertex 480 fps, CPU 190 fps on a 2005 laptop GPU), in one run on whatever
-//! adapter `HeadlessRenderer` picks (lavapipe on a machine without a GPU). A frame = back-to-front sort,
-//! uploads (and the rayon per-vertex evaluation on the CPU path), background + slab draw, and waiting for
-//! the GPU; no read-back. Criterion measures each path; then an interleaved run prints fps and the ratio
-//! of each path's frame time to the baseline's.
+//! Frames per second at 512×512 for the three thin-slab evaluation paths, each with single scattering
+//! (the paper) and with all orders (the table), and the baseline (Frisvad et al. 2005 §4: fragment
+//! 300 fps, vertex 480 fps, CPU 190 fps on a 2005 laptop GPU), in one run on whatever adapter
+//! `HeadlessRenderer` picks (lavapipe on a machine without a GPU). A frame = back-to-front sort, uploads
+//! (and the rayon per-vertex evaluation on the CPU path), background + slab draw, and waiting for the
+//! GPU; no read-back. Criterion measures each case; then an interleaved run prints fps, the ratio of each
+//! case's frame time to the baseline's and, per path, all orders to single.
 //!
 //! `cargo bench -p sheer-slab --bench paths`
 
@@ -11,6 +12,7 @@ use std::time::{Duration, Instant};
 
 use criterion::Criterion;
 use glam::Vec3;
+use sheer_slab::all_orders::{Scattering, default_table_path, load_all_orders_table};
 use sheer_slab::render::{
     Background, Camera, EvaluationPath, HeadlessRenderer, ShadingParams, SlabMesh, Texture2d,
 };
@@ -97,14 +99,21 @@ fn scene() -> Scene {
     }
 }
 
-fn frame(renderer: &mut HeadlessRenderer, scene: &Scene, path: EvaluationPath) {
+/// One measured configuration: a path and a scattering model.
+struct Case {
+    name: String,
+    path: EvaluationPath,
+    shading: ShadingParams,
+}
+
+fn frame(renderer: &mut HeadlessRenderer, scene: &Scene, case: &Case) {
     renderer
         .render_frame(
             &scene.mesh,
             &scene.camera,
-            &scene.shading,
+            &case.shading,
             &scene.background,
-            path,
+            case.path,
         )
         .expect("frame renders");
 }
@@ -113,8 +122,31 @@ fn main() {
     let mut renderer = HeadlessRenderer::new(SIZE, SIZE).expect("an adapter (lavapipe or a GPU)");
     println!("adapter: {}", renderer.adapter_description());
     let scene = scene();
+    let table = load_all_orders_table(default_table_path()).expect("the shipped all-orders table");
+    let mut cases = Vec::new();
     for path in EvaluationPath::ALL {
-        frame(&mut renderer, &scene, path); // compile pipelines outside the measurement
+        let models: &[Scattering] = if path == EvaluationPath::Baseline {
+            &[Scattering::Single]
+        } else {
+            &[Scattering::Single, Scattering::AllOrders(table.clone())]
+        };
+        for scattering in models {
+            cases.push(Case {
+                name: if path == EvaluationPath::Baseline {
+                    path.name().to_string()
+                } else {
+                    format!("{}/{}", path.name(), scattering.name())
+                },
+                path,
+                shading: ShadingParams {
+                    scattering: scattering.clone(),
+                    ..scene.shading.clone()
+                },
+            });
+        }
+    }
+    for case in &cases {
+        frame(&mut renderer, &scene, case); // compile pipelines, upload the table, outside the measurement
     }
 
     let mut criterion = Criterion::default()
@@ -123,58 +155,73 @@ fn main() {
         .configure_from_args();
     {
         let mut group = criterion.benchmark_group("frame_512x512");
-        for path in EvaluationPath::ALL {
-            group.bench_function(path.name(), |b| {
-                b.iter(|| frame(&mut renderer, &scene, path))
+        for case in &cases {
+            group.bench_function(&case.name, |b| {
+                b.iter(|| frame(&mut renderer, &scene, case))
             });
         }
         group.finish();
     }
     criterion.final_summary();
 
-    // Interleaved rounds so that drift of the machine affects every path alike; each round's frame
-    // times are divided by that round's baseline time and the median over rounds is reported, which
-    // discounts bursts of load from other processes.
+    // Interleaved rounds so that drift of the machine affects every case alike; each round's frame
+    // times are divided by that round's baseline (and single-scattering) time and the median over rounds
+    // is reported, which discounts bursts of load from other processes.
     let rounds = 40;
     let frames_per_round = 5;
-    let mut per_round: [Vec<f64>; 4] = Default::default();
+    let mut per_round: Vec<Vec<f64>> = vec![Vec::new(); cases.len()];
     for _ in 0..rounds {
-        for (slot, path) in EvaluationPath::ALL.into_iter().enumerate() {
+        for (slot, case) in cases.iter().enumerate() {
             let start = Instant::now();
             for _ in 0..frames_per_round {
-                frame(&mut renderer, &scene, path);
+                frame(&mut renderer, &scene, case);
             }
             per_round[slot].push(start.elapsed().as_secs_f64() / f64::from(frames_per_round));
         }
     }
-    let median = |values: &mut Vec<f64>| {
+    let median = |mut values: Vec<f64>| {
         values.sort_by(f64::total_cmp);
         0.5 * (values[(values.len() - 1) / 2] + values[values.len() / 2])
     };
-    let baseline_times = per_round[3].clone();
+    let ratio = |a: usize, b: usize| {
+        median(
+            per_round[a]
+                .iter()
+                .zip(&per_round[b])
+                .map(|(x, y)| x / y)
+                .collect(),
+        )
+    };
+    let baseline = cases.len() - 1;
     println!(
-        "\n512x512, {} triangles, {rounds} interleaved rounds of {frames_per_round} frames per path",
+        "\n512x512, {} triangles, {rounds} interleaved rounds of {frames_per_round} frames per case",
         scene.mesh.indices.len() / 3
     );
     println!(
-        "| path | median ms/frame | fps | median frame time / baseline (per round) | paper fps |"
+        "| case | median ms/frame | fps | frame time / baseline | all-orders / single | paper fps |"
     );
-    println!("|---|---|---|---|---|");
-    let paper = ["300", "480", "190", "-"];
-    for (slot, path) in EvaluationPath::ALL.into_iter().enumerate() {
-        let mut ratios: Vec<f64> = per_round[slot]
+    println!("|---|---|---|---|---|---|");
+    for (slot, case) in cases.iter().enumerate() {
+        let per_frame = median(per_round[slot].clone());
+        let single_slot = cases
             .iter()
-            .zip(&baseline_times)
-            .map(|(t, b)| t / b)
-            .collect();
-        let per_frame = median(&mut per_round[slot]);
+            .position(|c| c.path == case.path && c.shading.scattering == Scattering::Single);
+        let against_single = match (&case.shading.scattering, single_slot) {
+            (Scattering::AllOrders(_), Some(single)) => format!("{:.3}", ratio(slot, single)),
+            _ => "-".to_string(),
+        };
+        let paper = match case.path {
+            EvaluationPath::PerFragment => "300",
+            EvaluationPath::PerVertex => "480",
+            EvaluationPath::Cpu => "190",
+            EvaluationPath::Baseline => "-",
+        };
         println!(
-            "| {} | {:.2} | {:.1} | {:.3} | {} |",
-            path.name(),
+            "| {} | {:.2} | {:.1} | {:.3} | {against_single} | {paper} |",
+            case.name,
             1e3 * per_frame,
             1.0 / per_frame,
-            median(&mut ratios),
-            paper[slot]
+            ratio(slot, baseline),
         );
     }
 }

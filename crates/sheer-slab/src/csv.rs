@@ -2,6 +2,8 @@
 //! `tau1,albedo,mu0,mu,alpha,l_plus,l_minus`, the direct transmission (eq. 9's α) and the single-scattered
 //! radiances of eqs. (4) and (5) in W/(m²·sr) for a beam of unit irradiance normal to the beam (1 W/m²),
 //! inserted into eqs. (4)–(5) according to an [`IrradianceConvention`] (paper-literal: `E(0) = μ0`).
+//! With [`Scattering::AllOrders`] (`sheer slab --model all-orders`) `l_plus` and `l_minus` are the
+//! all-orders diffuse radiances instead: eqs. (4)/(5) plus the table's multiply-scattered part.
 //!
 //! Input: an optional header line `tau1,albedo,mu0,mu` first; blank lines are skipped; fields may carry
 //! surrounding spaces. Numbers are written with Rust's shortest round-trip formatting.
@@ -10,10 +12,10 @@ use std::io::{BufRead, Write};
 
 use thiserror::Error;
 
+use crate::all_orders::{Scattering, diffuse_radiance};
 use crate::model::{
-    Albedo, Cosine, IrradianceConvention, OpticalThickness, SlabParameterError,
-    direct_transmission, single_scattered_reflected_radiance,
-    single_scattered_transmitted_radiance,
+    Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness, SlabParameterError,
+    direct_transmission,
 };
 
 /// The header accepted on input and always written on output (input columns).
@@ -73,14 +75,24 @@ pub struct SlabRow {
     pub mu: f64,
     /// `exp(−τ1/μ)`.
     pub alpha: f64,
-    /// Eq. (4) for unit beam-normal irradiance under the chosen convention, W/(m²·sr).
+    /// Eq. (4) (all orders: plus the multiple part) for unit beam-normal irradiance under the chosen
+    /// convention, W/(m²·sr).
     pub l_plus: f64,
-    /// Eq. (5) likewise.
+    /// Eq. (5) (all orders: plus the multiple part) likewise.
     pub l_minus: f64,
 }
 
-/// Parses and evaluates one line of `tau1,albedo,mu0,mu`.
+/// Parses and evaluates one line of `tau1,albedo,mu0,mu` with the paper's single-scattering model.
 pub fn evaluate_row(line: &str, convention: IrradianceConvention) -> Result<SlabRow, RowProblem> {
+    evaluate_row_with(line, convention, &Scattering::Single)
+}
+
+/// Parses and evaluates one line of `tau1,albedo,mu0,mu` with the chosen scattering model.
+pub fn evaluate_row_with(
+    line: &str,
+    convention: IrradianceConvention,
+    scattering: &Scattering,
+) -> Result<SlabRow, RowProblem> {
     let fields: Vec<&str> = line.split(',').map(str::trim).collect();
     if fields.len() != 4 {
         return Err(RowProblem::ColumnCount(fields.len()));
@@ -99,14 +111,17 @@ pub fn evaluate_row(line: &str, convention: IrradianceConvention) -> Result<Slab
     let cos0 = Cosine::new("mu0", mu0).map_err(RowProblem::OutOfDomain)?;
     let cos = Cosine::new("mu", mu).map_err(RowProblem::OutOfDomain)?;
     let irradiance = convention.inserted_irradiance(1.0, cos0);
+    let radiance = |side| {
+        diffuse_radiance(scattering, side, tau, lambda, cos0, cos).map_err(RowProblem::OutOfDomain)
+    };
     Ok(SlabRow {
         optical_thickness: tau1,
         albedo,
         mu0,
         mu,
         alpha: direct_transmission(tau, cos),
-        l_plus: single_scattered_reflected_radiance(tau, lambda, cos0, cos) * irradiance,
-        l_minus: single_scattered_transmitted_radiance(tau, lambda, cos0, cos) * irradiance,
+        l_plus: radiance(LitSide::Front)? * irradiance,
+        l_minus: radiance(LitSide::Back)? * irradiance,
     })
 }
 
@@ -136,12 +151,24 @@ pub fn markdown_row(row: &SlabRow) -> String {
     )
 }
 
-/// Reads CSV rows from `input`, writes [`OUTPUT_HEADER`] and one evaluated row per input row to `output`.
-/// Stops at the first bad row with an error naming its 1-based line number.
+/// Reads CSV rows from `input`, writes [`OUTPUT_HEADER`] and one evaluated row per input row to `output`,
+/// with the paper's single-scattering model. Stops at the first bad row with an error naming its 1-based
+/// line number.
 pub fn evaluate_csv(
+    input: impl BufRead,
+    output: impl Write,
+    convention: IrradianceConvention,
+) -> Result<(), SlabCsvError> {
+    evaluate_csv_with(input, output, convention, &Scattering::Single)
+}
+
+/// [`evaluate_csv`] with the chosen scattering model (`all-orders`: rows whose τ1 lies outside the
+/// table's range are bad rows).
+pub fn evaluate_csv_with(
     input: impl BufRead,
     mut output: impl Write,
     convention: IrradianceConvention,
+    scattering: &Scattering,
 ) -> Result<(), SlabCsvError> {
     writeln!(output, "{OUTPUT_HEADER}")?;
     let mut seen_content = false;
@@ -156,9 +183,11 @@ pub fn evaluate_csv(
         if first_content && is_header(trimmed) {
             continue;
         }
-        let row = evaluate_row(trimmed, convention).map_err(|problem| SlabCsvError::Row {
-            row: index + 1,
-            problem,
+        let row = evaluate_row_with(trimmed, convention, scattering).map_err(|problem| {
+            SlabCsvError::Row {
+                row: index + 1,
+                problem,
+            }
         })?;
         writeln!(
             output,

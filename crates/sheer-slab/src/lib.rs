@@ -2,15 +2,21 @@
 //! semi-transparent objects": the single-scattering model of a locally plane-parallel, optically thin slab
 //! (their eqs. 4–9) on the CPU ([`model`], the `f64` reference) and on wgpu ([`render`]), plus a CSV
 //! evaluator for checking the model from outside ([`csv`]) and independent numerics ([`mod@reference`]).
+//! [`all_orders`] adds the choice of scattering model: `single` (the paper) or `all-orders` (eqs. 4–5
+//! plus the multiply-scattered radiance from `sheer-transport`'s precomputed table), on every path.
 //!
 //! See `README.md` for the irradiance-convention finding and the cancellation-free form of eq. (5).
 
+pub mod all_orders;
 pub mod csv;
 pub mod model;
 pub mod reference;
 pub mod render;
 
-pub use csv::{SlabCsvError, evaluate_csv};
+pub use all_orders::{
+    AllOrdersTable, Scattering, TableLoadError, default_table_path, load_all_orders_table,
+};
+pub use csv::{SlabCsvError, evaluate_csv, evaluate_csv_with};
 pub use model::{
     Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness, SlabParameterError,
     SlabShading, direct_transmission, point_light_beam_normal_irradiance,

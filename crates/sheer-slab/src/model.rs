@@ -72,6 +72,33 @@ pub enum SlabParameterError {
     /// Distance from a point light must be finite and strictly positive (m).
     #[error("distance {0} m to the light is not a finite number > 0")]
     Distance(f64),
+    /// The `all-orders` model covers only the τ1 range of its precomputed table.
+    #[error(
+        "optical thickness tau1 = {value} lies outside the all-orders table's range [{min}, {max}]"
+    )]
+    OutsideTable {
+        /// The rejected τ1.
+        value: f64,
+        /// Smallest τ1 of the table.
+        min: f64,
+        /// Largest τ1 of the table.
+        max: f64,
+    },
+    /// The all-orders table's sampler refused a query for another reason (not expected for validated
+    /// inputs; reported rather than panicking).
+    #[error(
+        "the all-orders table refused tau1 = {tau1}, Lambda = {albedo}, mu0 = {mu0}, mu = {mu}"
+    )]
+    TableQuery {
+        /// τ1.
+        tau1: f64,
+        /// Λ.
+        albedo: f64,
+        /// μ0.
+        mu0: f64,
+        /// μ.
+        mu: f64,
+    },
 }
 
 /// Optical thickness τ1 of the slab (dimensionless), validated finite and > 0.

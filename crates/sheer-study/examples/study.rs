@@ -1,7 +1,8 @@
-//! Runs the study from the command line, exactly as `sheer study …` will:
+//! The study without the app: a thin wrapper over [`sheer_study::StudyArgs`] and [`sheer_study::run`],
+//! the same two the app's `sheer study …` subcommand uses, for running the study from this crate alone.
 //!
-//! `cargo run -p sheer-study --release --example study -- all --out docs` (about 10 minutes; add
-//! `--quick` for a smoke run of seconds).
+//! `cargo run -p sheer-study --release --example study -- choose --quick --out /tmp/study` (seconds);
+//! the published results come from `cargo run --release -- study all --out docs`.
 
 use clap::Parser;
 use sheer_study::{StudyArgs, run};

@@ -1,15 +1,18 @@
 //! Ablation: what each part of the model costs and what it changes.
 //!
 //! Every variant of the flag (one part switched off, another integrator, another resolution) runs
-//! with the same sampling; its positions are compared with the full model run by the same method
-//! (the part's own effect) and with the full model's converged reference (effect plus integration
-//! error), and its silhouette with the full model's (see [`crate::silhouette`]). Grids of another
-//! resolution are compared at the full model's particles through bilinear interpolation in the
-//! cloth's (u, v) parameters.
+//! with the same sampling and the same base method (the automatic choice), except the integrator rows;
+//! its positions are compared with the full model run by the base method (the part's own effect) and
+//! with the full model's converged reference (effect plus integration error), its silhouette with the
+//! full model's (see [`crate::silhouette`]) and, when the scene has a coverage window, its
+//! time-averaged coverage with the full model's and the reference's ([`crate::coverage`]). Grids of
+//! another resolution are compared at the full model's particles through bilinear interpolation in the
+//! cloth's (u, v) parameters; coverage needs no resampling.
 
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::{GridSpec, Method, SimParams, SpringParams};
 
+use crate::coverage::coverage_difference;
 use crate::metrics::position_errors;
 use crate::reference::Reference;
 use crate::run::{Trajectory, on_one_thread, simulate};
@@ -35,6 +38,11 @@ pub struct AblationRow {
     pub rms_vs_reference: Option<f64>,
     /// `1 − IoU` of the orthographic coverage silhouettes of this variant and the full model.
     pub silhouette_difference: Option<f64>,
+    /// Time-averaged coverage difference from the full model run by the base method (the same on each
+    /// of the variant's rows; `None` without a coverage window or when either run diverged).
+    pub coverage_vs_full: Option<f64>,
+    /// Time-averaged coverage difference from the full model's reference.
+    pub coverage_vs_reference: Option<f64>,
     pub diverged: bool,
 }
 
@@ -74,14 +82,7 @@ struct Variant {
     setting: String,
     scene: Scene,
     method: Method,
-    /// The method whose full-model run this variant is compared with.
-    compare_with: Method,
 }
-
-/// The unconditionally stable method of the resolution and long-range-attachment rows: explicit base
-/// methods diverge on finer grids (their limit `2/ω_max` halves with the cell size), and the
-/// attachments act on position-based methods only.
-pub const POSITION_BASED_BASE: Method = Method::SmallStepsXpbd { substeps: 20 };
 
 fn with_params(scene: &Scene, change: impl FnOnce(&mut SimParams)) -> Scene {
     let mut changed = scene.clone();
@@ -89,9 +90,9 @@ fn with_params(scene: &Scene, change: impl FnOnce(&mut SimParams)) -> Scene {
     changed
 }
 
-/// The ablation of `scene` (the full model) run by `method`, at the reference's sample times. The
-/// resolutions `grids` and the long-range attachments are run with [`POSITION_BASED_BASE`] and
-/// compared with the full model run by it.
+/// The ablation of `scene` (the full model) run by `method` (the base: every row but the integrator
+/// rows uses it), at the reference's sample times and over the scene's coverage window. Every row is
+/// compared with the full model run by `method`.
 pub fn ablation(
     scene: &Scene,
     method: Method,
@@ -105,34 +106,31 @@ pub fn ablation(
         .iter()
         .map(|s| s.time)
         .collect();
+    let attachments = scene.params.long_range_attachments;
     let mut variants = vec![
         Variant {
             part: "full",
             setting: "all parts".into(),
             scene: scene.clone(),
             method,
-            compare_with: method,
         },
         Variant {
             part: "shear",
             setting: "off".into(),
             scene: with_params(scene, |p| p.shear = SpringParams::disabled()),
             method,
-            compare_with: method,
         },
         Variant {
             part: "bending",
             setting: "off".into(),
             scene: with_params(scene, |p| p.bend = SpringParams::disabled()),
             method,
-            compare_with: method,
         },
         Variant {
             part: "wind lift",
             setting: "off (C_L = 0)".into(),
             scene: with_params(scene, |p| p.wind.lift_coefficient = 0.0),
             method,
-            compare_with: method,
         },
         Variant {
             part: "gusts",
@@ -142,14 +140,12 @@ pub fn ablation(
                 p.wind.turbulence = 0.0;
             }),
             method,
-            compare_with: method,
         },
         Variant {
             part: "long-range attachments",
-            setting: "on".into(),
-            scene: with_params(scene, |p| p.long_range_attachments = true),
-            method: POSITION_BASED_BASE,
-            compare_with: POSITION_BASED_BASE,
+            setting: if attachments { "off" } else { "on" }.into(),
+            scene: with_params(scene, |p| p.long_range_attachments = !attachments),
+            method,
         },
         Variant {
             part: "integrator",
@@ -160,21 +156,12 @@ pub fn ablation(
                 cg_max_iterations: 100,
                 cg_tolerance: 1e-4,
             },
-            compare_with: method,
         },
         Variant {
             part: "integrator",
             setting: "symplectic Euler ×200 (explicit)".into(),
             scene: scene.clone(),
             method: Method::SymplecticEuler { substeps: 200 },
-            compare_with: method,
-        },
-        Variant {
-            part: "full",
-            setting: "all parts, position-based base".into(),
-            scene: scene.clone(),
-            method: POSITION_BASED_BASE,
-            compare_with: POSITION_BASED_BASE,
         },
     ];
     for &(columns, rows) in grids {
@@ -185,17 +172,18 @@ pub fn ablation(
             part: "resolution",
             setting: format!("{columns}×{rows}"),
             scene: scene.with_resolution(columns, rows)?,
-            method: POSITION_BASED_BASE,
-            compare_with: POSITION_BASED_BASE,
+            method,
         });
     }
     monitor.add_work(variants.len() as u64);
-    let viewport = Viewport::around_flag(256);
+    // The silhouette is taken through the coverage camera when the scene has one.
+    let viewport = scene
+        .coverage
+        .map_or(Viewport::around_flag(256), |w| w.viewport);
     let triangles_of =
         |s: &Scene| -> Result<Vec<[u32; 3]>, StudyError> { Ok(s.model()?.triangles) };
     let full_triangles = triangles_of(scene)?;
-    // Full-model runs by method, in order of first use (the first variant is the full model).
-    let mut full_runs: Vec<(Method, Trajectory)> = Vec::new();
+    let mut full_run: Option<Trajectory> = None;
     let mut rows = Vec::new();
     for variant in variants {
         let trajectory = on_one_thread(|| {
@@ -207,21 +195,17 @@ pub fn ablation(
                 monitor,
             )
         })??;
-        let is_full = variant.part == "full";
-        if is_full {
-            full_runs.push((variant.method, trajectory.clone()));
-        }
-        if !full_runs.iter().any(|(m, _)| *m == variant.compare_with) {
-            let run = on_one_thread(|| {
-                simulate(scene, variant.compare_with, scene.frame, &times, monitor)
-            })??;
-            full_runs.push((variant.compare_with, run));
-        }
-        let full_run = &full_runs
-            .iter()
-            .find(|(m, _)| *m == variant.compare_with)
-            .map_or(&trajectory, |(_, t)| t)
-            .clone();
+        // The first variant is the full model run by the base method.
+        let full_run = &*full_run.get_or_insert_with(|| trajectory.clone());
+        let coverage_against = |other: Option<&crate::coverage::MeanCoverage>| {
+            trajectory
+                .coverage
+                .as_ref()
+                .zip(other)
+                .and_then(|(own, other)| coverage_difference(own, other))
+        };
+        let coverage_vs_full = coverage_against(full_run.coverage.as_ref());
+        let coverage_vs_reference = coverage_against(reference.trajectory.coverage.as_ref());
         let triangles = triangles_of(&variant.scene)?;
         for &time in &times {
             let own = trajectory.at(time);
@@ -249,6 +233,8 @@ pub fn ablation(
                 rms_vs_full: rms_against(expected_full),
                 rms_vs_reference: rms_against(expected_reference),
                 silhouette_difference: silhouette,
+                coverage_vs_full,
+                coverage_vs_reference,
                 diverged: own.is_none(),
             });
         }

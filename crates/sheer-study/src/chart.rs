@@ -9,6 +9,7 @@ use std::sync::OnceLock;
 
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
+use sheer_cloth::Method;
 
 use crate::StudyError;
 use crate::stability::{StabilityClass, StabilityMap};
@@ -40,17 +41,6 @@ fn chart_error(path: &Path, error: impl std::fmt::Display) -> StudyError {
     }
 }
 
-/// Method names in chart order with their colours.
-pub const METHOD_ORDER: [&str; 7] = [
-    "explicit_euler",
-    "symplectic_euler",
-    "verlet",
-    "implicit_euler",
-    "pbd",
-    "xpbd",
-    "small_steps_xpbd",
-];
-
 fn method_colour(name: &str) -> RGBColor {
     match name {
         "explicit_euler" => RGBColor(150, 150, 150),
@@ -63,19 +53,96 @@ fn method_colour(name: &str) -> RGBColor {
     }
 }
 
-/// Work–precision chart: one panel per (scene, time), RMS position error (m) against CPU ms per
-/// simulated second, log–log, one line per method through its knob settings (sorted by cost).
-/// Diverged runs are left out (the CSV lists them). A dashed vertical line marks the reference's
-/// halving difference: errors left of it are not resolved.
-pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError> {
-    register_chart_font()?;
-    let mut panels: Vec<(String, f64)> = Vec::new();
+/// One panel of the work–precision chart: (method name, error, cost) points and the reference's own
+/// halving difference in the same measure.
+struct Panel {
+    title: String,
+    x_desc: &'static str,
+    halving: f64,
+    points: Vec<(&'static str, f64, f64)>,
+}
+
+/// The panels of `rows`: one per (scene, time) with the RMS position error, then one per scene with a
+/// coverage window with the time-averaged coverage difference (one point per run).
+fn panels(rows: &[Row]) -> Vec<Panel> {
+    let mut keys: Vec<(String, f64)> = Vec::new();
     for row in rows {
         let key = (row.scene.clone(), row.metrics.time);
-        if !panels.contains(&key) {
-            panels.push(key);
+        if !keys.contains(&key) {
+            keys.push(key);
         }
     }
+    let particles_of = |scene: &str| {
+        rows.iter()
+            .find(|r| r.scene == scene)
+            .map_or(0, |r| r.particles)
+    };
+    let mut panels = Vec::new();
+    for (scene, time) in &keys {
+        let panel: Vec<&Row> = rows
+            .iter()
+            .filter(|r| &r.scene == scene && r.metrics.time == *time)
+            .collect();
+        panels.push(Panel {
+            title: format!("{scene} ({} particles), t = {time} s", particles_of(scene)),
+            x_desc: "RMS position error (m)",
+            halving: panel
+                .iter()
+                .map(|r| r.reference_rms_halving)
+                .fold(0.0, f64::max),
+            points: panel
+                .iter()
+                .filter_map(|r| {
+                    Some((
+                        r.method.name(),
+                        r.metrics.rms_position_error?,
+                        r.cpu_ms_per_simulated_second,
+                    ))
+                })
+                .collect(),
+        });
+    }
+    let mut scenes: Vec<&str> = Vec::new();
+    for row in rows {
+        if row.coverage_difference.is_some() && !scenes.contains(&row.scene.as_str()) {
+            scenes.push(&row.scene);
+        }
+    }
+    for scene in scenes {
+        let mut seen: Vec<Method> = Vec::new();
+        let mut points = Vec::new();
+        let mut halving = 0.0f64;
+        for r in rows.iter().filter(|r| r.scene == scene) {
+            if seen.contains(&r.method) {
+                continue;
+            }
+            seen.push(r.method);
+            halving = halving.max(r.reference_coverage_halving.unwrap_or(0.0));
+            if let Some(d) = r.coverage_difference {
+                points.push((r.method.name(), d, r.cpu_ms_per_simulated_second));
+            }
+        }
+        panels.push(Panel {
+            title: format!(
+                "{scene} ({} particles), time-averaged coverage",
+                particles_of(scene)
+            ),
+            x_desc: "coverage difference (fraction of covered area)",
+            halving,
+            points,
+        });
+    }
+    panels
+}
+
+/// Work–precision chart: one panel per (scene, time), RMS position error (m) against CPU ms per
+/// simulated second, log–log, one line per method through its knob settings (sorted by cost), plus one
+/// panel per flag scene with the time-averaged coverage difference on the error axis. Diverged runs are
+/// left out (the CSV lists them). A dashed vertical line marks the reference's halving difference:
+/// errors left of it are not resolved.
+pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError> {
+    register_chart_font()?;
+    let panels = panels(rows);
     let columns = panels.len().clamp(1, 3);
     let panel_rows = panels.len().div_ceil(columns).max(1);
     let root = BitMapBackend::new(path, (560 * columns as u32, 460 * panel_rows as u32 + 40))
@@ -84,28 +151,22 @@ pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError>
     let (title, body) = root.split_vertically(40);
     title
         .titled(
-            "Work–precision: RMS position error against the reference vs CPU cost (one thread)",
+            "Work–precision: error against the reference vs CPU cost (one thread)",
             ("sans-serif", 22),
         )
         .map_err(|e| chart_error(path, e))?;
     let areas = body.split_evenly((panel_rows, columns));
-    for ((scene, time), area) in panels.iter().zip(areas) {
-        let panel: Vec<&Row> = rows
-            .iter()
-            .filter(|r| &r.scene == scene && r.metrics.time == *time)
-            .collect();
+    for (panel, area) in panels.iter().zip(areas) {
         let points: Vec<(f64, f64)> = panel
+            .points
             .iter()
-            .filter_map(|r| Some((r.metrics.rms_position_error?, r.cpu_ms_per_simulated_second)))
+            .map(|&(_, e, c)| (e, c))
             .filter(|(e, c)| *e > 0.0 && *c > 0.0)
             .collect();
         if points.is_empty() {
             continue;
         }
-        let halving = panel
-            .iter()
-            .map(|r| r.reference_rms_halving)
-            .fold(0.0, f64::max);
+        let halving = panel.halving;
         let (mut x0, mut x1, mut y0, mut y1) = points.iter().fold(
             (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
             |(a, b, c, d), (x, y)| (a.min(*x), b.max(*x), c.min(*y), d.max(*y)),
@@ -117,12 +178,8 @@ pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError>
         x1 *= 2.0;
         y0 /= 2.0;
         y1 *= 2.0;
-        let particles = panel.first().map_or(0, |r| r.particles);
         let mut chart = ChartBuilder::on(&area)
-            .caption(
-                format!("{scene} ({particles} particles), t = {time} s"),
-                ("sans-serif", 18),
-            )
+            .caption(&panel.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(42)
             .y_label_area_size(62)
@@ -130,7 +187,7 @@ pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError>
             .map_err(|e| chart_error(path, e))?;
         chart
             .configure_mesh()
-            .x_desc("RMS position error (m)")
+            .x_desc(panel.x_desc)
             .y_desc("CPU ms per simulated s")
             .x_label_formatter(&|v| format!("{v:.0e}"))
             .y_label_formatter(&|v| format!("{v:.0e}"))
@@ -149,13 +206,12 @@ pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError>
                 .label("reference halving difference")
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
         }
-        for name in METHOD_ORDER {
+        for name in Method::NAMES {
             let mut line: Vec<(f64, f64)> = panel
+                .points
                 .iter()
-                .filter(|r| r.method.name() == name)
-                .filter_map(|r| {
-                    Some((r.metrics.rms_position_error?, r.cpu_ms_per_simulated_second))
-                })
+                .filter(|(n, _, _)| *n == name)
+                .map(|&(_, e, c)| (e, c))
                 .filter(|(e, c)| *e > 0.0 && *c > 0.0)
                 .collect();
             if line.is_empty() {
@@ -219,7 +275,7 @@ pub fn stability_chart(map: &StabilityMap, path: &Path) -> Result<(), StudyError
     }
     let step_edges = log_edges(&steps);
     let stiffness_edges = log_edges(&stiffnesses);
-    let names: Vec<&str> = METHOD_ORDER
+    let names: Vec<&str> = Method::NAMES
         .iter()
         .copied()
         .filter(|n| map.cells.iter().any(|c| c.method.name() == *n))

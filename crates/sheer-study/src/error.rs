@@ -33,4 +33,6 @@ pub enum StudyError {
     Chart { path: String, message: String },
     #[error("cannot read the chart font {path}: {message}")]
     Font { path: String, message: String },
+    #[error("cannot encode {path}: {message}")]
+    Encode { path: String, message: String },
 }

@@ -2,8 +2,9 @@
 //!
 //! Speed against accuracy for the `sheer-cloth` simulator: a converged reference solution per scene,
 //! error metrics against it at fixed simulated times, measured CPU cost, work–precision charts,
-//! stability maps (time step × stiffness), an ablation table of the model's parts and an automatic
-//! choice of the cheapest method that meets an error budget.
+//! stability maps (time step × stiffness), an ablation table of the model's parts, a phase-insensitive
+//! accuracy measure for the chaotic flag (time-averaged coverage, [`coverage`]) and an automatic
+//! choice of the cheapest method that meets an error budget (written to `docs/choice.toml`).
 //!
 //! Every run is timed on one rayon thread with the thread's own CPU clock, so the costs compare across
 //! methods and do not count time the thread spent waiting for the CPU (see [`cpu`]).
@@ -24,6 +25,7 @@ pub mod ablation;
 pub mod chart;
 pub mod choose;
 pub mod cli;
+pub mod coverage;
 pub mod cpu;
 mod error;
 pub mod metrics;
@@ -36,8 +38,9 @@ pub mod stability;
 pub mod work_precision;
 
 pub use ablation::{AblationRow, ablation};
-pub use choose::{Budget, Choice, choose};
+pub use choose::{Budget, Choice, ChoiceFile, DEFAULT_COVERAGE_BUDGET, choose};
 pub use cli::{StudyArgs, StudyCommand, run};
+pub use coverage::{CoverageWindow, MeanCoverage, coverage_difference};
 pub use error::StudyError;
 pub use metrics::{ErrorMetrics, position_errors};
 pub use monitor::Monitor;

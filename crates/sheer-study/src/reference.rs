@@ -5,10 +5,12 @@
 //! undamped frequency (see [`crate::stability::omega_max_gershgorin`]), rounded to a whole number of
 //! sub-steps per frame. The halving check integrates again at half that step; their difference at
 //! each sample time bounds the reference's own error (for a second-order method the finer run's error
-//! is about a third of it), and the study reports it beside the errors it measures.
+//! is about a third of it), and the study reports it beside the errors it measures; likewise the
+//! difference of their time-averaged coverages ([`crate::coverage`]) when the scene measures one.
 
 use sheer_cloth::Method;
 
+use crate::coverage::coverage_difference;
 use crate::metrics::position_errors;
 use crate::run::{Trajectory, on_one_thread, simulate};
 use crate::stability::omega_max_gershgorin;
@@ -37,6 +39,9 @@ pub struct Reference {
     pub substep: f64,
     pub trajectory: Trajectory,
     pub halving: Vec<HalvingCheck>,
+    /// Coverage difference (dimensionless) of the coarser run against the finer one, when the scene
+    /// measures coverage: errors in coverage below it are not resolved.
+    pub coverage_halving: Option<f64>,
 }
 
 impl Reference {
@@ -105,6 +110,11 @@ pub fn reference(
             })
         })
         .collect();
+    let coverage_halving = coarse
+        .coverage
+        .as_ref()
+        .zip(fine.coverage.as_ref())
+        .and_then(|(c, f)| coverage_difference(c, f));
     Ok(Reference {
         scene: scene.name.clone(),
         method: Method::Verlet {
@@ -113,5 +123,6 @@ pub fn reference(
         substep: scene.frame / (2 * substeps) as f64,
         trajectory: fine,
         halving,
+        coverage_halving,
     })
 }

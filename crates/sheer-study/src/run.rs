@@ -1,8 +1,10 @@
-//! One timed run: a scene integrated by one method, with snapshots at fixed simulated times.
+//! One timed run: a scene integrated by one method, with snapshots at fixed simulated times and, when
+//! the scene asks for it, the time-averaged coverage over its window.
 
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::{Method, StepError};
 
+use crate::coverage::{CoverageAccumulator, MeanCoverage};
 use crate::cpu::thread_cpu_seconds;
 use crate::{Monitor, Scene, StudyError};
 
@@ -29,6 +31,9 @@ pub struct Trajectory {
     pub initial_energy: f64,
     /// One snapshot per requested time reached before any divergence, in time order.
     pub snapshots: Vec<Snapshot>,
+    /// Time-averaged coverage over the scene's window (`None`: the scene has none, or the run diverged
+    /// before the window's end).
+    pub coverage: Option<MeanCoverage>,
     /// CPU seconds the stepping took on this thread (snapshots excluded).
     pub cpu_seconds: f64,
     /// Simulated seconds actually integrated.
@@ -55,9 +60,12 @@ impl Trajectory {
     }
 }
 
-/// Integrates `scene` with `method`, calling `step(step)` until the last of `sample_times` (s), and
-/// keeps a snapshot at each sample time (rounded to a whole number of steps). A diverged step ends the
-/// run (its snapshots so far are kept). Call it inside a one-thread pool for comparable costs.
+/// Integrates `scene` with `method`, calling `step(step)` until the last of `sample_times` (s) or the
+/// end of the scene's coverage window, whichever is later, and keeps a snapshot at each sample time
+/// (rounded to a whole number of steps) and the coverage of every step that ends inside the window. A
+/// diverged step ends the run (its snapshots so far are kept; its coverage is dropped). Snapshots and
+/// coverage are not counted in the run's CPU time. Call it inside a one-thread pool for comparable
+/// costs.
 pub fn simulate(
     scene: &Scene,
     method: Method,
@@ -72,6 +80,7 @@ pub fn simulate(
             reason: "must be finite and > 0 s",
         });
     }
+    let to_steps = |time: f64| (time / step).round().max(1.0) as u64;
     let mut sample_steps = Vec::with_capacity(sample_times.len());
     for &time in sample_times {
         if !(time.is_finite() && time > 0.0) {
@@ -81,20 +90,42 @@ pub fn simulate(
                 reason: "must be finite and > 0 s",
             });
         }
-        sample_steps.push((time / step).round().max(1.0) as u64);
+        sample_steps.push(to_steps(time));
     }
     sample_steps.sort_unstable();
+    let window = match scene.coverage {
+        Some(w)
+            if w.start.is_finite() && w.end.is_finite() && 0.0 < w.start && w.start <= w.end =>
+        {
+            Some((to_steps(w.start), to_steps(w.end), w.viewport))
+        }
+        Some(w) => {
+            return Err(StudyError::InvalidInput {
+                name: "coverage window start",
+                value: w.start,
+                reason: "the window must satisfy 0 < start ≤ end, both finite (s)",
+            });
+        }
+        None => None,
+    };
+    let mut accumulator = window.map(|(_, _, viewport)| CoverageAccumulator::new(viewport));
     let mut sim = scene.simulation(method)?;
+    let triangles = sim.triangles().to_vec();
     let mut trajectory = Trajectory {
         method,
         step,
         initial_energy: sim.total_energy(),
         snapshots: Vec::with_capacity(sample_steps.len()),
+        coverage: None,
         cpu_seconds: 0.0,
         simulated_seconds: 0.0,
         diverged_at: None,
     };
-    let last = sample_steps.last().copied().unwrap_or(0);
+    let last = sample_steps
+        .last()
+        .copied()
+        .unwrap_or(0)
+        .max(window.map_or(0, |(_, end, _)| end));
     let mut next_sample = 0;
     let mut taken = 0u64;
     let mut started = thread_cpu_seconds();
@@ -113,10 +144,11 @@ pub fn simulate(
                 });
             }
         }
-        if taken == sample_steps[next_sample] {
-            let now = thread_cpu_seconds();
-            trajectory.cpu_seconds += now - started;
-            while next_sample < sample_steps.len() && sample_steps[next_sample] == taken {
+        let sample_now = sample_steps.get(next_sample) == Some(&taken);
+        let cover_now = window.is_some_and(|(start, end, _)| (start..=end).contains(&taken));
+        if sample_now || cover_now {
+            trajectory.cpu_seconds += thread_cpu_seconds() - started;
+            while sample_steps.get(next_sample) == Some(&taken) {
                 trajectory.snapshots.push(Snapshot {
                     time: taken as f64 * step,
                     positions: sim.positions().to_vec(),
@@ -124,6 +156,9 @@ pub fn simulate(
                     max_strain: sim.max_strain(None),
                 });
                 next_sample += 1;
+            }
+            if cover_now && let Some(accumulator) = accumulator.as_mut() {
+                accumulator.add(sim.positions(), &triangles);
             }
             started = thread_cpu_seconds();
         }
@@ -134,6 +169,9 @@ pub fn simulate(
     }
     trajectory.cpu_seconds += thread_cpu_seconds() - started;
     trajectory.simulated_seconds = taken as f64 * step;
+    if trajectory.diverged_at.is_none() {
+        trajectory.coverage = accumulator.and_then(|a| a.finish());
+    }
     Ok(trajectory)
 }
 

@@ -1,15 +1,20 @@
 //! The scenes of the study: a waving flag, a hanging sheet settling under gravity, and a stiff sheet
 //! on which the explicit integrators fail.
 //!
-//! A scene is a grid, which edge is pinned, the full [`SimParams`] (the method is filled in per run) and
-//! the frame time at which `Simulation::step` is called. Long-range attachments are off in every study
-//! scene: they are an extra constraint that only the position-based methods know, so with them on the
-//! methods would not integrate the same model (the ablation measures what they change).
+//! A scene is a grid, which edge is pinned, the full [`SimParams`] (the method is filled in per run),
+//! the frame time at which `Simulation::step` is called and, for the flags, the window of the
+//! time-averaged coverage ([`crate::coverage`]). The flags start from the app's default flag
+//! ([`SimParams::waving_flag`]), so the study measures the flag the app shows. Long-range attachments
+//! are off in the sweep scenes: they are an extra constraint that only the position-based methods know,
+//! so with them on the methods would not integrate the same model. The automatic choice runs on
+//! [`Scene::default_flag`], the app's default exactly, attachments on (the ablation measures what they
+//! change).
 
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::{ClothModel, GridSpec, Method, SimParams, Simulation, SpringParams};
 
 use crate::StudyError;
+use crate::coverage::CoverageWindow;
 
 /// Which particles are pinned.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,32 +38,55 @@ pub struct Scene {
     pub params: SimParams,
     /// Time per `Simulation::step` call, s (the app's 60 Hz frame).
     pub frame: f64,
+    /// Frames over which runs of this scene accumulate their time-averaged coverage (`None`: not
+    /// measured). Runs last at least until the window's end.
+    pub coverage: Option<CoverageWindow>,
 }
 
 /// The app's frame time, s.
 pub const FRAME: f64 = 1.0 / 60.0;
 
 impl Scene {
-    /// The default waving flag (the app's: 1.1 m × 0.8 m, 0.2 kg/m², hoist pinned, 6 m/s wind along
-    /// +x with 1.5 m/s across, gusts and turbulence on) at `columns × rows` particles.
+    /// The app's default waving flag ([`SimParams::waving_flag`]: 1.1 m × 0.8 m, 0.2 kg/m², hoist
+    /// pinned, 5 m/s wind along +x with 2.5 m/s across, gusts and turbulence on) at `columns × rows`
+    /// particles, long-range attachments off, coverage over [`CoverageWindow::flag`].
     pub fn flag((columns, rows): (usize, usize)) -> Result<Scene, StudyError> {
         let grid = GridSpec {
             columns,
             rows,
             ..GridSpec::default()
         };
-        let mut params = SimParams {
+        let params = SimParams {
             long_range_attachments: false,
-            ..SimParams::default()
+            ..SimParams::waving_flag()
         };
-        params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
         Scene::checked(Scene {
             name: "flag".into(),
             grid,
             pinning: Pinning::Hoist,
             params,
             frame: FRAME,
+            coverage: Some(CoverageWindow::flag()),
         })
+    }
+
+    /// Exactly the app's default flag: [`GridSpec::default`] (64 × 46) and [`SimParams::waving_flag`]
+    /// (long-range attachments on, as the app runs it), coverage over [`CoverageWindow::flag`]. The
+    /// automatic choice and the ablation run on it.
+    pub fn default_flag() -> Result<Scene, StudyError> {
+        Scene::checked(Scene {
+            name: "default_flag".into(),
+            grid: GridSpec::default(),
+            pinning: Pinning::Hoist,
+            params: SimParams::waving_flag(),
+            frame: FRAME,
+            coverage: Some(CoverageWindow::flag()),
+        })
+    }
+
+    /// The same scene with another coverage window (`None`: no coverage).
+    pub fn with_coverage(self, coverage: Option<CoverageWindow>) -> Scene {
+        Scene { coverage, ..self }
     }
 
     /// The flag's fabric hung from its top edge in still air, settling under gravity from rest.
@@ -70,7 +98,7 @@ impl Scene {
         };
         let mut params = SimParams {
             long_range_attachments: false,
-            ..SimParams::default()
+            ..SimParams::waving_flag()
         };
         params.wind.velocity = DVec3::ZERO;
         Scene::checked(Scene {
@@ -79,6 +107,7 @@ impl Scene {
             pinning: Pinning::TopEdge,
             params,
             frame: FRAME,
+            coverage: None,
         })
     }
 
@@ -105,6 +134,7 @@ impl Scene {
             pinning: Pinning::TopEdge,
             params,
             frame: FRAME,
+            coverage: None,
         })
     }
 
@@ -143,6 +173,7 @@ impl Scene {
             pinning: Pinning::TopEdge,
             params,
             frame: FRAME,
+            coverage: None,
         })
     }
 

@@ -30,25 +30,42 @@ impl Viewport {
     }
 }
 
-/// Coverage mask, row-major, `resolution²` entries.
-pub fn coverage(positions: &[DVec3], triangles: &[[u32; 3]], viewport: &Viewport) -> Vec<bool> {
+/// Calls `visit(pixel)` for every pixel (row-major index) whose centre lies in a triangle of the
+/// cloth; a pixel covered by several triangles (a fold, a shared edge) is visited once per triangle.
+pub fn rasterise(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    viewport: &Viewport,
+    mut visit: impl FnMut(usize),
+) {
     let n = viewport.resolution;
+    if n == 0 {
+        return;
+    }
     let pixel = viewport.size / n as f64;
-    let mut mask = vec![false; n * n];
     for tri in triangles {
         let [a, b, c] = tri.map(|i| positions[i as usize]);
         let edge =
             |p: DVec3, q: DVec3, x: f64, y: f64| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
         let area = edge(a, b, c.x, c.y);
-        if area == 0.0 {
-            continue; // seen edge-on: covers no pixel centre
+        if area == 0.0 || !area.is_finite() {
+            continue; // seen edge-on (covers no pixel centre), or not a triangle at all
         }
         let to_pixel = |v: f64, min: f64| ((v - min) / pixel - 0.5).floor();
+        // Triangles wholly outside the window cover nothing (and must not be clamped onto its edge).
+        let (x_lo, x_hi) = (
+            to_pixel(a.x.min(b.x).min(c.x), viewport.min_x),
+            to_pixel(a.x.max(b.x).max(c.x), viewport.min_x) + 1.0,
+        );
+        let (y_lo, y_hi) = (
+            to_pixel(a.y.min(b.y).min(c.y), viewport.min_y),
+            to_pixel(a.y.max(b.y).max(c.y), viewport.min_y) + 1.0,
+        );
+        if x_hi < 0.0 || y_hi < 0.0 || x_lo > n as f64 - 1.0 || y_lo > n as f64 - 1.0 {
+            continue;
+        }
         let clamp = |v: f64| v.clamp(0.0, n as f64 - 1.0) as usize;
-        let x0 = clamp(to_pixel(a.x.min(b.x).min(c.x), viewport.min_x));
-        let x1 = clamp(to_pixel(a.x.max(b.x).max(c.x), viewport.min_x) + 1.0);
-        let y0 = clamp(to_pixel(a.y.min(b.y).min(c.y), viewport.min_y));
-        let y1 = clamp(to_pixel(a.y.max(b.y).max(c.y), viewport.min_y) + 1.0);
+        let (x0, x1, y0, y1) = (clamp(x_lo), clamp(x_hi), clamp(y_lo), clamp(y_hi));
         for py in y0..=y1 {
             let y = viewport.min_y + (py as f64 + 0.5) * pixel;
             for px in x0..=x1 {
@@ -62,11 +79,18 @@ pub fn coverage(positions: &[DVec3], triangles: &[[u32; 3]], viewport: &Viewport
                     e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0
                 };
                 if inside {
-                    mask[py * n + px] = true;
+                    visit(py * n + px);
                 }
             }
         }
     }
+}
+
+/// Coverage mask, row-major, `resolution²` entries.
+pub fn coverage(positions: &[DVec3], triangles: &[[u32; 3]], viewport: &Viewport) -> Vec<bool> {
+    let n = viewport.resolution;
+    let mut mask = vec![false; n * n];
+    rasterise(positions, triangles, viewport, |pixel| mask[pixel] = true);
     mask
 }
 

@@ -4,6 +4,7 @@
 
 use sheer_cloth::Method;
 
+use crate::coverage::{CoverageWindow, coverage_difference};
 use crate::metrics::ErrorMetrics;
 use crate::reference::Reference;
 use crate::run::{on_one_thread, simulate};
@@ -28,6 +29,12 @@ pub struct Row {
     pub cpu_ms_per_simulated_second: f64,
     /// The reference's own halving difference (RMS, m) at this time: errors below it are not resolved.
     pub reference_rms_halving: f64,
+    /// Time-averaged coverage difference of the whole run against the reference's (dimensionless,
+    /// [`crate::coverage`]); the same on each of the run's rows. `None` when the scene measures no
+    /// coverage or the run diverged.
+    pub coverage_difference: Option<f64>,
+    /// The reference's own coverage halving difference.
+    pub reference_coverage_halving: Option<f64>,
 }
 
 impl Row {
@@ -52,6 +59,11 @@ pub struct StudyConfig {
     pub choice_grid: (usize, usize),
     /// Sample times of the choice sweep and the ablation, s (the budget's time must be one).
     pub choice_times: Vec<f64>,
+    /// Grid of the converged reference compared with the choice grid's: the resolution difference in
+    /// coverage that sizes the default budget.
+    pub choice_coarse_grid: (usize, usize),
+    /// Window and camera of the time-averaged coverage of the flags.
+    pub coverage_window: CoverageWindow,
     /// Resolutions of the ablation.
     pub ablation_grids: Vec<(usize, usize)>,
     /// Grid of the stability map.
@@ -73,9 +85,11 @@ impl StudyConfig {
             // 0.1 mm when its step is halved, against 3 cm at 1 s: the flutter is chaotic).
             sample_times: vec![0.25, 1.0, 5.0],
             choice_grid: (64, 46),
-            // Up to 1 s at 64 × 46: the reference costs 8× the 32 × 23 one per simulated second, and
-            // the 32 × 23 sweep already shows how errors grow to 5 s.
+            // Pointwise errors up to 1 s at 64 × 46 (the 32 × 23 sweep shows how they grow to 5 s);
+            // the runs go on to the end of the coverage window.
             choice_times: vec![0.25, 1.0],
+            choice_coarse_grid: (32, 23),
+            coverage_window: CoverageWindow::flag(),
             ablation_grids: vec![(16, 11), (32, 23), (64, 46), (128, 93), (256, 186)],
             stability_grid: (16, 11),
             stability_stiffnesses: vec![1e2, 3e2, 1e3, 3e3, 1e4, 3e4, 1e5],
@@ -84,7 +98,8 @@ impl StudyConfig {
         }
     }
 
-    /// A small, fast version of everything (tests, smoke runs): 8 × 6 grids, 0.25 s and 0.5 s.
+    /// A small, fast version of everything (tests, smoke runs): 8 × 6 grids, 0.25 s and 0.5 s, coverage
+    /// over 0.25–0.5 s at 128 × 128 pixels.
     pub fn quick() -> StudyConfig {
         StudyConfig {
             quick: true,
@@ -93,6 +108,12 @@ impl StudyConfig {
             sample_times: vec![0.25, 0.5],
             choice_grid: (12, 9),
             choice_times: vec![0.25],
+            choice_coarse_grid: (8, 6),
+            coverage_window: CoverageWindow {
+                start: 0.25,
+                end: 0.5,
+                viewport: crate::silhouette::Viewport::around_flag(128),
+            },
             ablation_grids: vec![(8, 6), (12, 9), (16, 11)],
             stability_grid: (8, 6),
             stability_stiffnesses: vec![1e2, 1e4],
@@ -168,6 +189,11 @@ pub fn work_precision(
     for &method in &sweep.methods {
         let trajectory = on_one_thread(|| simulate(scene, method, scene.frame, &times, monitor))??;
         let cost = trajectory.cpu_ms_per_simulated_second();
+        let coverage = trajectory
+            .coverage
+            .as_ref()
+            .zip(reference.trajectory.coverage.as_ref())
+            .and_then(|(run, expected)| coverage_difference(run, expected));
         for &time in &times {
             let Some(metrics) = ErrorMetrics::at(&trajectory, &reference.trajectory, time) else {
                 continue;
@@ -180,6 +206,8 @@ pub fn work_precision(
                 metrics,
                 cpu_ms_per_simulated_second: cost,
                 reference_rms_halving: reference.halving_at(time).map_or(0.0, |h| h.rms_difference),
+                coverage_difference: coverage,
+                reference_coverage_halving: reference.coverage_halving,
             });
         }
         monitor.finish_run(&format!(

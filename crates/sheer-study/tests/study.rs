@@ -1,17 +1,19 @@
-//! Tests of the study's own machinery: the reference against an analytic answer, the error metrics,
-//! the stability boundary against linear stability analysis, the automatic choice, and a quick
-//! end-to-end run that writes every output file.
+//! Tests of the study's own machinery: the reference against an analytic answer, the error metrics
+//! (pointwise and time-averaged coverage), determinism of the reference, the stability boundary against
+//! linear stability analysis, the automatic choice, and a quick end-to-end run that writes every output
+//! file.
 
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::{GridSpec, Method, SimParams, SpringParams};
 use sheer_study::chart::register_chart_font;
 use sheer_study::reference::reference;
+use sheer_study::silhouette::Viewport;
 use sheer_study::stability::{
     find_stability_boundary, omega_max_gershgorin, omega_max_power_iteration,
 };
 use sheer_study::{
-    Budget, ErrorMetrics, Monitor, Pinning, Row, Scene, StudyConfig, choose, simulate,
-    work_precision,
+    Budget, ChoiceFile, CoverageWindow, ErrorMetrics, Monitor, Pinning, Row, Scene, StudyConfig,
+    choose, coverage_difference, simulate, work_precision,
 };
 
 /// A free 6 × 4 cloth at rest under gravity, no air, no damping: every particle feels the same
@@ -32,6 +34,7 @@ fn free_fall() -> Scene {
         pinning: Pinning::Free,
         params,
         frame: 1.0 / 60.0,
+        coverage: None,
     }
 }
 
@@ -162,6 +165,8 @@ fn row(method: Method, time: f64, rms: Option<f64>, cost: f64) -> Row {
         },
         cpu_ms_per_simulated_second: cost,
         reference_rms_halving: 0.0,
+        coverage_difference: rms.map(|e| e * 10.0),
+        reference_coverage_halving: Some(1e-4),
     }
 }
 
@@ -193,15 +198,35 @@ fn choice_is_the_cheapest_setting_within_budget() {
             2.0,
         ),
     ];
-    let budget = Budget::default();
+    let budget = Budget::RmsPosition {
+        time: 1.0,
+        max_error: 5e-3,
+    };
     let choice = choose(&budget, &rows).unwrap();
     assert_eq!(choice.method, Method::SmallStepsXpbd { substeps: 20 });
     assert_eq!(choice.candidates, 2);
-    let strict = Budget {
-        max_rms_position_error: 1e-5,
-        ..budget
+    assert_eq!(choice.error, 4e-3);
+    let strict = Budget::RmsPosition {
+        time: 1.0,
+        max_error: 1e-5,
     };
     assert!(choose(&strict, &rows).is_none());
+    // The coverage budget reads the per-run coverage difference (here 10 × the RMS error), whatever
+    // the time: the XPBD run measured at 5 s (coverage 0.01) is now the cheapest within 0.05.
+    let coverage = Budget::Coverage {
+        max_difference: 0.05,
+    };
+    let choice = choose(&coverage, &rows).unwrap();
+    assert_eq!(
+        choice.method,
+        Method::Xpbd {
+            substeps: 1,
+            iterations: 5
+        }
+    );
+    assert_eq!(choice.candidates, 3);
+    // The default budget is the coverage one.
+    assert!(matches!(Budget::default(), Budget::Coverage { .. }));
 }
 
 #[test]
@@ -239,10 +264,7 @@ fn quick_study_writes_every_output() {
         let out = std::env::temp_dir().join("sheer-study-no-font");
         let result = sheer_study::cli::write_all(
             &StudyConfig::quick(),
-            &Budget {
-                time: 0.25,
-                max_rms_position_error: 5e-3,
-            },
+            &Budget::default(),
             &out,
             &Monitor::hidden(),
         );
@@ -250,11 +272,11 @@ fn quick_study_writes_every_output() {
         return;
     }
     let out = std::env::temp_dir().join(format!("sheer-study-quick-{}", std::process::id()));
+    // A budget every quick setting that does not diverge meets, so a choice file is written.
     sheer_study::cli::write_all(
         &StudyConfig::quick(),
-        &Budget {
-            time: 0.25,
-            max_rms_position_error: 5e-3,
+        &Budget::Coverage {
+            max_difference: 10.0,
         },
         &out,
         &Monitor::hidden(),
@@ -269,6 +291,7 @@ fn quick_study_writes_every_output() {
         "stability-map.md",
         "ablation.csv",
         "ablation.md",
+        "choice.toml",
     ] {
         let path = out.join(file);
         let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
@@ -282,5 +305,202 @@ fn quick_study_writes_every_output() {
             "{scene}"
         );
     }
+    // The flags' rows carry a coverage difference; the sheets' do not.
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = header
+        .iter()
+        .position(|c| *c == "coverage_difference")
+        .unwrap();
+    let covered = |scene: &str| {
+        csv.lines()
+            .filter(|l| l.starts_with(&format!("{scene},")))
+            .any(|l| !l.split(',').nth(column).unwrap().is_empty())
+    };
+    assert!(covered("flag") && covered("default_flag"));
+    assert!(!covered("hanging_sheet") && !covered("stiff"));
+    // The choice file parses, says it is a quick run, and records the flag it was measured on: the
+    // default flag's parameters with the chosen method.
+    let text = std::fs::read_to_string(out.join("choice.toml")).unwrap();
+    let file: ChoiceFile = toml::from_str(&text).unwrap();
+    assert!(file.quick);
+    assert_eq!(file.budget.kind, "coverage");
+    let method = file.scene.simulation.method;
+    assert_eq!(method.name(), file.choice.method);
+    assert_eq!(method.substeps(), file.choice.substeps);
+    assert_eq!(
+        file.scene.simulation,
+        Scene::default_flag().unwrap().params_with(method)
+    );
+    assert!(
+        file.choice.error <= 10.0 && file.choice.coverage_difference == Some(file.choice.error)
+    );
+    let md = std::fs::read_to_string(out.join("work-precision.md")).unwrap();
+    assert!(md.contains("## Budget, choice and why"), "{md}");
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// A flat sheet in the x–y plane that stays where it is: springs at rest length, no gravity, no air.
+fn still_sheet(window: CoverageWindow) -> Scene {
+    let params = SimParams::springs_only(
+        Method::Verlet { substeps: 1 },
+        SpringParams::new(1000.0, 0.0),
+    );
+    Scene {
+        name: "still_sheet".into(),
+        grid: GridSpec::default(),
+        pinning: Pinning::Free,
+        params,
+        frame: 1.0 / 60.0,
+        coverage: Some(window),
+    }
+}
+
+/// Pixel centres `min + (i + ½) · pixel` of `count` pixels that lie in `[low, high]`.
+fn centres_inside(min: f64, pixel: f64, count: usize, low: f64, high: f64) -> Vec<usize> {
+    (0..count)
+        .filter(|&i| {
+            let centre = min + (i as f64 + 0.5) * pixel;
+            centre >= low && centre <= high
+        })
+        .collect()
+}
+
+#[test]
+fn coverage_of_a_still_sheet_is_its_rectangle_in_every_frame() {
+    let window = CoverageWindow {
+        start: 0.1,
+        end: 0.3,
+        viewport: Viewport::around_flag(256),
+    };
+    let scene = still_sheet(window);
+    let run = simulate(
+        &scene,
+        Method::Verlet { substeps: 1 },
+        scene.frame,
+        &[0.2],
+        &Monitor::hidden(),
+    )
+    .unwrap();
+    let coverage = run.coverage.as_ref().unwrap();
+    // Frames 6 … 18 of 1/60 s: 13 frames, each with the sheet on the same pixels.
+    assert_eq!(coverage.frames, 13);
+    // By hand: the 1.1 m × 0.8 m sheet spans x ∈ [0, 1.1], y ∈ [0, 0.8]; covered are exactly the
+    // pixel centres inside (edges never fall on a centre: they sit 0.3 and 0.1 pixels off one).
+    let v = window.viewport;
+    let pixel = v.size / v.resolution as f64;
+    let columns = centres_inside(v.min_x, pixel, v.resolution, 0.0, 1.1);
+    let rows = centres_inside(v.min_y, pixel, v.resolution, 0.0, 0.8);
+    assert_eq!((columns.len(), rows.len()), (141, 102));
+    for (index, &fraction) in coverage.fractions.iter().enumerate() {
+        let (row, column) = (index / v.resolution, index % v.resolution);
+        let inside = rows.contains(&row) && columns.contains(&column);
+        assert_eq!(
+            fraction,
+            if inside { 1.0 } else { 0.0 },
+            "pixel {row},{column}"
+        );
+    }
+    // Identical runs: zero difference.
+    assert_eq!(coverage_difference(coverage, coverage), Some(0.0));
+}
+
+#[test]
+fn coverage_of_a_falling_sheet_matches_the_analytic_fall() {
+    // The free-falling sheet of `reference_reproduces_free_fall`, seen over 0.1 … 0.3 s: Verlet (at 20
+    // sub-steps, inside the springs' stability limit 2/ω_max, so rounding noise does not grow) moves it
+    // exactly by ½ g t² (to ~1e-12 m), so pixel (row, column) is covered in frame k exactly when its
+    // centre lies in the sheet translated by ½ g t_k².
+    let window = CoverageWindow {
+        start: 0.1,
+        end: 0.3,
+        viewport: Viewport::around_flag(256),
+    };
+    let scene = Scene {
+        coverage: Some(window),
+        ..free_fall()
+    };
+    let run = simulate(
+        &scene,
+        Method::Verlet { substeps: 20 },
+        scene.frame,
+        &[0.3],
+        &Monitor::hidden(),
+    )
+    .unwrap();
+    let coverage = run.coverage.as_ref().unwrap();
+    let v = window.viewport;
+    let pixel = v.size / v.resolution as f64;
+    let columns = centres_inside(v.min_x, pixel, v.resolution, 0.0, 1.1);
+    let mut expected = vec![0.0; v.resolution * v.resolution];
+    let frames: Vec<f64> = (6..=18).map(|k| k as f64 / 60.0).collect();
+    for &t in &frames {
+        let drop = 0.5 * 9.81 * t * t;
+        for row in centres_inside(v.min_y, pixel, v.resolution, -drop, 0.8 - drop) {
+            for &column in &columns {
+                expected[row * v.resolution + column] += 1.0 / frames.len() as f64;
+            }
+        }
+    }
+    assert_eq!(coverage.frames as usize, frames.len());
+    let worst = coverage
+        .fractions
+        .iter()
+        .zip(&expected)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    // Sums of 1/13 in another order: equal to rounding.
+    assert!(worst < 1e-12, "{worst}");
+    // Fractions strictly between 0 and 1 exist: rows the sheet's edges swept across.
+    assert!(coverage.fractions.iter().any(|&f| f > 0.0 && f < 1.0));
+}
+
+#[test]
+fn coverage_difference_vanishes_for_identical_runs_only() {
+    let config = StudyConfig::quick();
+    let scene = Scene::flag(config.sweep_grid)
+        .unwrap()
+        .with_coverage(Some(config.coverage_window));
+    let monitor = Monitor::hidden();
+    let run = |method| {
+        simulate(&scene, method, scene.frame, &[0.25], &monitor)
+            .unwrap()
+            .coverage
+            .unwrap()
+    };
+    let a = run(Method::SmallStepsXpbd { substeps: 10 });
+    let b = run(Method::SmallStepsXpbd { substeps: 10 });
+    assert_eq!(a, b);
+    assert_eq!(coverage_difference(&a, &b), Some(0.0));
+    let c = run(Method::SmallStepsXpbd { substeps: 40 });
+    let d = coverage_difference(&c, &a).unwrap();
+    assert!(d > 0.0 && d.is_finite(), "{d}");
+}
+
+#[test]
+fn the_reference_is_bit_reproducible() {
+    // Two study runs of the same scene must produce the same reference bit for bit (the simulator is
+    // deterministic and the reference's step follows from the scene alone); a different result for the
+    // same setting therefore means a different scene (see docs/study.md, "Why two runs disagreed").
+    let config = StudyConfig::quick();
+    let scene = Scene::default_flag()
+        .unwrap()
+        .with_resolution(config.choice_grid.0, config.choice_grid.1)
+        .unwrap()
+        .with_coverage(Some(config.coverage_window));
+    let monitor = Monitor::hidden();
+    let first = reference(&scene, &config.choice_times, &monitor).unwrap();
+    let second = reference(&scene, &config.choice_times, &monitor).unwrap();
+    assert_eq!(first.method, second.method);
+    let bits = |r: &sheer_study::Reference| -> Vec<u64> {
+        r.trajectory
+            .snapshots
+            .iter()
+            .flat_map(|s| s.positions.iter().flat_map(|p| p.to_array()))
+            .map(f64::to_bits)
+            .collect()
+    };
+    assert_eq!(bits(&first), bits(&second));
+    assert_eq!(first.trajectory.coverage, second.trajectory.coverage);
+    assert_eq!(first.halving, second.halving);
+    assert!(first.coverage_halving.unwrap() >= 0.0);
 }

@@ -1,16 +1,19 @@
-//! Regenerates `assets/all_orders_table.bin` (the multiply-scattered radiance table) with the all-orders
-//! solver and reports its size and its interpolation error against the solver at off-grid points.
+//! Regenerates `assets/all_orders_table.bin` at the workspace root (the multiply-scattered radiance
+//! table) with the all-orders solver and reports its size and its interpolation error against the solver
+//! at off-grid points.
 //!
-//! `cargo run -p sheer-transport --release --example make_table`
+//! `cargo run -p sheer-transport --release --example make_table` (or `-- OUTPUT.bin` to write elsewhere)
 
 use sheer_transport::{AllOrdersTable, SlabSolver, TableSpec};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let start = std::time::Instant::now();
     let table = AllOrdersTable::generate(TableSpec::default())?;
-    let path = AllOrdersTable::DEFAULT_PATH;
-    table.write(path)?;
-    let bytes = std::fs::metadata(path)?.len();
+    let path = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| AllOrdersTable::DEFAULT_PATH.to_string());
+    table.write(&path)?;
+    let bytes = std::fs::metadata(&path)?.len();
     println!(
         "wrote {path}: {bytes} bytes, spec {:?}, generated in {:.1} s",
         table.spec(),

@@ -39,7 +39,7 @@ pub use single::{
     single_scattered_transmitted_radiance_hg,
 };
 pub use slab::{Discretisation, SlabSolution, SlabSolver};
-pub use table::{AllOrdersTable, TableSpec};
+pub use table::{AllOrdersTable, TableFace, TableSpec};
 
 /// Everything that can go wrong in this crate: bad physical input or a malformed table file.
 #[derive(Debug, thiserror::Error)]

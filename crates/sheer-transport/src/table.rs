@@ -22,7 +22,7 @@
 //!   reflected value diverges like `ln(1/μ0)` while `L_m = Λ² μ0 f → 0`, the neighbour `μ0 = μ_1` is
 //!   stored.
 //!
-//! # File format (`assets/all_orders_table.bin`, little-endian)
+//! # File format (`assets/all_orders_table.bin` at the workspace root, little-endian)
 //! `b"SHEERAOT"`, `u32` version (1), `u32` counts `n_tau, n_albedo, n_cosine`, `f64` τ1 range
 //! (min, max), then `f32` values `[side][tau][albedo][mu0][mu]` with side 0 = reflected, 1 = transmitted.
 
@@ -39,7 +39,7 @@ const VERSION: u32 = 1;
 /// Albedo used for the Λ = 0 node, where `L_m / Λ²` is a limit.
 const ALBEDO_FLOOR: f64 = 1.0e-8;
 
-/// Grid sizes of a table. [`TableSpec::default`] is the one shipped in `assets/`.
+/// Grid sizes of a table. [`TableSpec::default`] is the one shipped in the workspace's `assets/`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableSpec {
     /// Nodes along `c = ln τ1 + τ1`.
@@ -89,7 +89,10 @@ impl TableSpec {
     /// Λ at fractional node position `position` ∈ [0, albedo_count − 1] of the albedo axis warped for
     /// optical thickness `tau1`.
     pub fn albedo_at(&self, position: f64, tau1: f64) -> f64 {
-        let s = albedo_warp(position / (self.albedo_count - 1) as f64, tau1);
+        let s = albedo_warp(
+            position / (self.albedo_count - 1) as f64,
+            albedo_warp_strength(tau1),
+        );
         1.0 - s * s
     }
 
@@ -120,12 +123,26 @@ impl TableSpec {
     }
 }
 
+/// Which face of the slab the light leaves through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TableFace {
+    /// The lit face (reflection, eq. (4)'s side).
+    Reflected = 0,
+    /// The unlit face (transmission, eq. (5)'s side).
+    Transmitted = 1,
+}
+
 /// The multiply-scattered radiance table and its sampler.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AllOrdersTable {
     spec: TableSpec,
     /// `ln(L_m/(Λ² μ0))`, `[side][tau][albedo][mu0][mu]`.
     values: Vec<f32>,
+    /// Albedo-warp strength β of every τ1 node (derived from `spec`; cached because recomputing a
+    /// node's τ1 inverts `ln τ + τ` by Newton's method).
+    warp_strengths: Vec<f64>,
+    /// `e^β − 1` of every τ1 node, likewise cached for the sampler.
+    warp_scales: Vec<f64>,
 }
 
 /// Reciprocity-filled `[mu0][mu]` blocks (reflected, transmitted) of `ln f` for one (τ1, Λ).
@@ -214,18 +231,17 @@ fn albedo_warp_strength(tau1: f64) -> f64 {
     1.1 * tau1.ln_1p()
 }
 
-/// `s = √(1−Λ)` at albedo coordinate `w ∈ [0, 1]`: `s = (e^{βw} − 1)/(e^β − 1)`, uniform for thin slabs
-/// and crowding towards Λ = 1 for thick ones, where transmission depends on Λ through `√(1−Λ) τ1`.
-fn albedo_warp(w: f64, tau1: f64) -> f64 {
-    let beta = albedo_warp_strength(tau1);
+/// `s = √(1−Λ)` at albedo coordinate `w ∈ [0, 1]` for warp strength `beta`: `s = (e^{βw} − 1)/(e^β − 1)`,
+/// uniform for thin slabs and crowding towards Λ = 1 for thick ones, where transmission depends on Λ
+/// through `√(1−Λ) τ1`.
+fn albedo_warp(w: f64, beta: f64) -> f64 {
     (beta * w).exp_m1() / beta.exp_m1()
 }
 
-/// Inverse of [`albedo_warp`]: `w = ln(1 + s (e^β − 1)) / β`.
-fn albedo_coordinate(albedo: f64, tau1: f64) -> f64 {
-    let beta = albedo_warp_strength(tau1);
-    let s = (1.0 - albedo).sqrt();
-    ((s * beta.exp_m1()).ln_1p() / beta).clamp(0.0, 1.0)
+/// Inverse of [`albedo_warp`] for warp strength `beta` (`scale` = `e^β − 1`):
+/// `w = ln(1 + s (e^β − 1)) / β` with `s = √(1−Λ)`.
+fn albedo_coordinate(s: f64, beta: f64, scale: f64) -> f64 {
+    ((s * scale).ln_1p() / beta).clamp(0.0, 1.0)
 }
 
 /// Position of a coordinate on a uniform axis of `count` nodes spanning `[0, 1]`: (lower node, weight).
@@ -236,9 +252,12 @@ fn axis_position(unit: f64, count: usize) -> (usize, f64) {
 }
 
 impl AllOrdersTable {
-    /// Path of the shipped table inside this crate.
-    pub const DEFAULT_PATH: &'static str =
-        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/all_orders_table.bin");
+    /// Path of the shipped table: `assets/all_orders_table.bin` at the workspace root (resolved at
+    /// compile time from this crate's location).
+    pub const DEFAULT_PATH: &'static str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/all_orders_table.bin"
+    );
 
     /// Generates a table with the all-orders solver (parallel over (τ1, Λ); the result does not depend
     /// on the thread count since every block is computed independently and stored in order).
@@ -257,12 +276,47 @@ impl AllOrdersTable {
         let mut values = Vec::with_capacity(2 * spec.values_per_side());
         values.extend(blocks.iter().flat_map(|(r, _)| r.iter().copied()));
         values.extend(blocks.iter().flat_map(|(_, t)| t.iter().copied()));
-        Ok(Self { spec, values })
+        Ok(Self::from_parts(spec, values))
+    }
+
+    /// A table from validated grid sizes and values, with the derived per-node albedo warp.
+    fn from_parts(spec: TableSpec, values: Vec<f32>) -> Self {
+        let warp_strengths: Vec<f64> = (0..spec.tau_count)
+            .map(|t| albedo_warp_strength(spec.tau_node(t)))
+            .collect();
+        let warp_scales = warp_strengths.iter().map(|beta| beta.exp_m1()).collect();
+        Self {
+            spec,
+            values,
+            warp_strengths,
+            warp_scales,
+        }
     }
 
     /// The grid sizes.
     pub fn spec(&self) -> TableSpec {
         self.spec
+    }
+
+    /// The stored values `ln(L_m/(Λ² μ0))`, laid out `[face][tau][albedo][mu0][mu]` (face 0 =
+    /// reflected), each axis on its nodes as described in the module docs: for uploading to a GPU.
+    pub fn log_values(&self) -> &[f32] {
+        &self.values
+    }
+
+    /// The albedo-warp strength `β = 1.1 ln(1 + τ1)` of every τ1 node (`s = √(1−Λ) = (e^{βw} −
+    /// 1)/(e^β − 1)` at albedo coordinate `w`), for samplers outside this crate.
+    pub fn albedo_warp_strengths(&self) -> &[f64] {
+        &self.warp_strengths
+    }
+
+    /// The τ1 axis in its coordinate `c = ln τ1 + τ1`: `(c(tau_min), c(tau_max))`; nodes are uniform in
+    /// `c` between these ends.
+    pub fn tau_coordinate_range(&self) -> (f64, f64) {
+        (
+            tau_coordinate(self.spec.tau_min),
+            tau_coordinate(self.spec.tau_max),
+        )
     }
 
     /// Serialises to the file format described in the module docs.
@@ -318,7 +372,7 @@ impl AllOrdersTable {
         if values.iter().any(|v| !v.is_finite()) {
             return Err(TransportError::TableFormat("non-finite value".into()));
         }
-        Ok(Self { spec, values })
+        Ok(Self::from_parts(spec, values))
     }
 
     /// Writes the table file.
@@ -331,12 +385,50 @@ impl AllOrdersTable {
         Self::from_bytes(&std::fs::read(path)?)
     }
 
-    /// Quadrilinear interpolation of the stored `ln f` for one side.
-    fn interpolate(&self, side: usize, tau1: f64, albedo: f64, mu0: f64, mu: f64) -> Result<f64> {
+    /// Quadrilinear interpolation of the stored `ln f = ln(L_m/(Λ² μ0))` for one face: the reduced
+    /// multiply-scattered radiance, so that `L_m = Λ² μ0 e^{ln f}` (sr⁻¹ per unit irradiance normal to
+    /// the beam). `tau1` must lie in the table's range, the other arguments as for
+    /// [`Self::multiple_reflected_radiance`].
+    pub fn log_reduced_multiple_radiance(
+        &self,
+        face: TableFace,
+        tau1: f64,
+        albedo: f64,
+        mu0: f64,
+        mu: f64,
+    ) -> Result<f64> {
+        self.interpolate(face as usize, tau1, albedo, mu0, mu)
+    }
+
+    /// [`Self::log_reduced_multiple_radiance`] for several (τ1, Λ) pairs at the same cosines (colour
+    /// channels): the cosine positions are found once, and the τ1 position once per distinct τ1 in a row.
+    /// Each result equals the one-channel call bit for bit.
+    pub fn log_reduced_multiple_radiance_channels<const N: usize>(
+        &self,
+        face: TableFace,
+        tau1: [f64; N],
+        albedo: [f64; N],
+        mu0: f64,
+        mu: f64,
+    ) -> Result<[f64; N]> {
+        let cosines = self.cosine_position(mu0, mu)?;
+        let mut result = [0.0; N];
+        let mut previous: Option<(f64, (usize, f64))> = None;
+        for channel in 0..N {
+            validate::albedo(albedo[channel])?;
+            let tau = match previous {
+                Some((value, position)) if value == tau1[channel] => position,
+                _ => self.tau_position(tau1[channel])?,
+            };
+            previous = Some((tau1[channel], tau));
+            result[channel] = self.interpolate_at(face as usize, tau, albedo[channel], cosines);
+        }
+        Ok(result)
+    }
+
+    /// Validates τ1 against the table's range; its (lower node, weight) on the τ1 axis.
+    fn tau_position(&self, tau1: f64) -> Result<(usize, f64)> {
         validate::optical_thickness(tau1)?;
-        validate::albedo(albedo)?;
-        validate::incident_cosine(mu0)?;
-        validate::emergent_cosine(mu)?;
         let spec = &self.spec;
         // A relative slack of 1e-12 admits the end values despite rounding.
         if tau1 < spec.tau_min * (1.0 - 1e-12) || tau1 > spec.tau_max * (1.0 + 1e-12) {
@@ -349,29 +441,66 @@ impl AllOrdersTable {
         }
         let (c0, c1) = (tau_coordinate(spec.tau_min), tau_coordinate(spec.tau_max));
         let tau_unit = ((tau_coordinate(tau1) - c0) / (c1 - c0)).clamp(0.0, 1.0);
-        let (t0, wt) = axis_position(tau_unit, spec.tau_count);
-        let (k0, wk) = axis_position(mu0.sqrt(), spec.cosine_count);
-        let (j0, wj) = axis_position(mu.sqrt(), spec.cosine_count);
+        Ok(axis_position(tau_unit, spec.tau_count))
+    }
+
+    /// Validates the cosines; their (lower node, weight) on the μ0 and μ axes.
+    fn cosine_position(&self, mu0: f64, mu: f64) -> Result<[(usize, f64); 2]> {
+        validate::incident_cosine(mu0)?;
+        validate::emergent_cosine(mu)?;
+        Ok([
+            axis_position(mu0.sqrt(), self.spec.cosine_count),
+            axis_position(mu.sqrt(), self.spec.cosine_count),
+        ])
+    }
+
+    /// Quadrilinear interpolation of the stored `ln f` for one side at validated positions.
+    fn interpolate_at(
+        &self,
+        side: usize,
+        (t0, wt): (usize, f64),
+        albedo: f64,
+        [(k0, wk), (j0, wj)]: [(usize, f64); 2],
+    ) -> f64 {
+        let spec = &self.spec;
         let n = spec.cosine_count;
         let side_offset = side * spec.values_per_side();
+        // Bilinear weights of the (μ0, μ) cell's nodes (k0, j0), (k0, j0+1), (k0+1, j0), (k0+1, j0+1).
+        let cell = [
+            (1.0 - wk) * (1.0 - wj),
+            (1.0 - wk) * wj,
+            wk * (1.0 - wj),
+            wk * wj,
+        ];
+        let corner = k0 * n + j0;
         let mut sum = 0.0;
+        let s = (1.0 - albedo).sqrt();
         for (dt, ft) in [(0, 1.0 - wt), (1, wt)] {
             // The albedo axis is warped per τ1 node, so each τ1 neighbour has its own Λ position.
             let (a0, wa) = axis_position(
-                albedo_coordinate(albedo, spec.tau_node(t0 + dt)),
+                albedo_coordinate(s, self.warp_strengths[t0 + dt], self.warp_scales[t0 + dt]),
                 spec.albedo_count,
             );
             for (da, fa) in [(0, 1.0 - wa), (1, wa)] {
-                let base = side_offset + ((t0 + dt) * spec.albedo_count + a0 + da) * spec.block();
-                for (dk, fk) in [(0, 1.0 - wk), (1, wk)] {
-                    for (dj, fj) in [(0, 1.0 - wj), (1, wj)] {
-                        let value = self.values[base + (k0 + dk) * n + j0 + dj];
-                        sum += ft * fa * fk * fj * f64::from(value);
-                    }
-                }
+                let base =
+                    side_offset + ((t0 + dt) * spec.albedo_count + a0 + da) * spec.block() + corner;
+                let values = &self.values[base..base + n + 2];
+                let bilinear = cell[0] * f64::from(values[0])
+                    + cell[1] * f64::from(values[1])
+                    + cell[2] * f64::from(values[n])
+                    + cell[3] * f64::from(values[n + 1]);
+                sum += ft * fa * bilinear;
             }
         }
-        Ok(sum)
+        sum
+    }
+
+    /// Quadrilinear interpolation of the stored `ln f` for one side.
+    fn interpolate(&self, side: usize, tau1: f64, albedo: f64, mu0: f64, mu: f64) -> Result<f64> {
+        let tau = self.tau_position(tau1)?;
+        validate::albedo(albedo)?;
+        let cosines = self.cosine_position(mu0, mu)?;
+        Ok(self.interpolate_at(side, tau, albedo, cosines))
     }
 
     /// Multiply-scattered (orders ≥ 2) radiance leaving the lit face, per unit irradiance normal to the

@@ -1,10 +1,11 @@
 //! The precomputed all-orders table: file round trip and validation, exactness at nodes, and its
 //! interpolation error against the solver at off-grid points.
 
-use sheer_transport::{AllOrdersTable, SlabSolver, TableSpec, TransportError};
+use sheer_transport::{AllOrdersTable, SlabSolver, TableFace, TableSpec, TransportError};
 
 fn shipped() -> AllOrdersTable {
-    AllOrdersTable::read(AllOrdersTable::DEFAULT_PATH).expect("assets/all_orders_table.bin")
+    AllOrdersTable::read(AllOrdersTable::DEFAULT_PATH)
+        .expect("the shipped table, assets/all_orders_table.bin at the workspace root")
 }
 
 #[test]
@@ -158,4 +159,50 @@ fn generation_is_independent_of_thread_count() {
             .install(|| AllOrdersTable::generate(spec).unwrap())
     };
     assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn logarithm_and_channel_samplers_agree_with_the_radiance_sampler() {
+    // The reduced logarithm is what the radiance sampler exponentiates (L_m = Λ² μ0 e^{ln f}), and the
+    // three-channel sampler (shared cosine and τ1 positions, as the renderer's CPU path uses it) gives
+    // each channel's one-channel result bit for bit, with equal and with different τ1.
+    let table = shipped();
+    for (taus, albedos, mu0, mu) in [
+        ([2.0, 2.0, 2.0], [1.0, 0.5, 0.03], 0.6, 0.8),
+        ([0.01, 3.7, 10.0], [0.9, 0.0, 0.99], 1.0, 0.001),
+        ([0.2, 0.2, 7.5], [0.7, 0.7, 0.2], 0.05, 1.0),
+    ] {
+        for face in [TableFace::Reflected, TableFace::Transmitted] {
+            let channels = table
+                .log_reduced_multiple_radiance_channels(face, taus, albedos, mu0, mu)
+                .unwrap();
+            for c in 0..3 {
+                let one = table
+                    .log_reduced_multiple_radiance(face, taus[c], albedos[c], mu0, mu)
+                    .unwrap();
+                assert_eq!(channels[c].to_bits(), one.to_bits(), "{face:?} {c}");
+                let radiance = match face {
+                    TableFace::Reflected => {
+                        table.multiple_reflected_radiance(taus[c], albedos[c], mu0, mu)
+                    }
+                    TableFace::Transmitted => {
+                        table.multiple_transmitted_radiance(taus[c], albedos[c], mu0, mu)
+                    }
+                }
+                .unwrap();
+                assert_eq!(radiance, albedos[c] * albedos[c] * mu0 * one.exp());
+            }
+        }
+    }
+    // Any channel outside the table is an error.
+    assert!(matches!(
+        table.log_reduced_multiple_radiance_channels(
+            TableFace::Reflected,
+            [2.0, 11.0, 2.0],
+            [0.5; 3],
+            0.5,
+            0.5
+        ),
+        Err(TransportError::OutsideTable { value, .. }) if value == 11.0
+    ));
 }

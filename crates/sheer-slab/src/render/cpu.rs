@@ -1,15 +1,17 @@
 //! CPU-side work of the renderer: the per-vertex "on the CPU" evaluation path (rayon, `f64` model of
-//! [`crate::model`]), the lit-side rule it shares with `shaders/lit_side.wgsl`, back-to-front triangle
-//! sorting, and half-float texture quantisation shared by upload and CPU sampling.
+//! [`crate::model`], and for the all-orders model the `f64` table sampler of [`crate::all_orders`]), the
+//! lit-side rule it shares with `shaders/lit_side.wgsl`, back-to-front triangle sorting, and half-float
+//! texture quantisation shared by upload and CPU sampling.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::scene::{ShadingParams, SlabMesh, Texture2d};
+use crate::all_orders::{Scattering, multiple_scattered_radiance_per_albedo_rgb, table_tau_range};
 use crate::model::{
-    Albedo, Cosine, OpticalThickness, direct_transmission, single_scattered_reflected_radiance,
-    single_scattered_transmitted_radiance,
+    Albedo, Cosine, LitSide, OpticalThickness, SlabParameterError, direct_transmission,
+    single_scattered_reflected_radiance, single_scattered_transmitted_radiance,
 };
 
 /// Cosines below this are evaluated at this value, as in `shaders/thin_slab.wgsl` (grazing guard).
@@ -19,7 +21,8 @@ pub const COSINE_FLOOR: f64 = 1e-6;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct VertexSlab {
-    /// L± for Λ = 1 (W/(m²·sr)) per channel.
+    /// L±/Λ (W/(m²·sr)) per channel: single scattering for Λ = 1, plus for the all-orders model the
+    /// multiple part per unit albedo evaluated with the vertex's Λ (the fragment multiplies by its Λ).
     pub radiance_per_albedo: [f32; 3],
     /// α = e^{−τ1/μ} per channel.
     pub transmittance: [f32; 3],
@@ -42,45 +45,75 @@ pub fn lit_side_cosines(normal: DVec3, to_light: DVec3, to_eye: DVec3) -> (f64, 
     (n.dot(light).abs(), signed_mu.abs(), signed_mu >= 0.0)
 }
 
-/// The model at one surface point for Λ = 1: L± (W/(m²·sr)) and α per channel, with the same geometric
-/// guards as the shader (μ0 ≤ 0: no light; cosines floored at [`COSINE_FLOOR`] and capped at 1 against
-/// rounding). `tau` per channel must be > 0 and finite (validated by [`ShadingParams::validate`]).
+/// The model at one surface point: L/Λ (W/(m²·sr)) and α per channel, with the same geometric guards as
+/// the shader (μ0 ≤ 0: no light; cosines floored at [`COSINE_FLOOR`] and capped at 1 against rounding).
+/// `tau` per channel must be > 0 and finite (validated by [`ShadingParams::validate`]). `albedo` (Λ per
+/// channel) is used only by the all-orders model, whose multiple part is not linear in Λ; single
+/// scattering is returned for Λ = 1, as the GPU paths interpolate it.
 pub fn slab_values_at(
     position: DVec3,
     normal: DVec3,
     tau: [f64; 3],
+    albedo: [f64; 3],
     eye: DVec3,
     params: &ShadingParams,
-) -> ([f64; 3], [f64; 3]) {
+) -> Result<([f64; 3], [f64; 3]), SlabParameterError> {
     let to_light = params.light_position.as_dvec3() - position;
     let (mu0, mu, lit) = lit_side_cosines(normal, to_light, eye - position);
-    let unit = Albedo::new(1.0).expect("1 is a valid albedo");
-    let cos_mu = Cosine::new("mu", mu.clamp(COSINE_FLOOR, 1.0)).expect("clamped into (0, 1]");
+    let unit = Albedo::new(1.0)?;
+    let cos_mu = Cosine::new("mu", mu.clamp(COSINE_FLOOR, 1.0))?;
+    let cos_mu0 = Cosine::new("mu0", mu0.clamp(COSINE_FLOOR, 1.0))?;
+    let side = if lit { LitSide::Front } else { LitSide::Back };
+    let optical_thickness = [
+        OpticalThickness::new(tau[0])?,
+        OpticalThickness::new(tau[1])?,
+        OpticalThickness::new(tau[2])?,
+    ];
+    let multiple_per_albedo = match &params.scattering {
+        Scattering::AllOrders(table) if mu0 > 0.0 => {
+            // Validation admits τ1 up to TABLE_RANGE_SLACK outside the table (its ends in f32) and Λ
+            // up to half-float rounding above 1 (texel × scale ≤ 1 before quantisation): these guards
+            // only absorb that rounding, as the shader's do.
+            let (min, max) = table_tau_range(table);
+            let clamp_tau = |c: usize| OpticalThickness::new(tau[c].clamp(min, max));
+            let clamp_albedo = |c: usize| Albedo::new(albedo[c].clamp(0.0, 1.0));
+            multiple_scattered_radiance_per_albedo_rgb(
+                table,
+                side,
+                [clamp_tau(0)?, clamp_tau(1)?, clamp_tau(2)?],
+                [clamp_albedo(0)?, clamp_albedo(1)?, clamp_albedo(2)?],
+                cos_mu0,
+                cos_mu,
+            )?
+        }
+        _ => [0.0; 3],
+    };
     let mut radiance = [0.0; 3];
     let mut transmittance = [0.0; 3];
     for channel in 0..3 {
-        let Ok(optical_thickness) = OpticalThickness::new(tau[channel]) else {
-            // Unreachable for validated parameters; an opaque black slab is the safe reading.
-            continue;
-        };
-        transmittance[channel] = direct_transmission(optical_thickness, cos_mu);
+        transmittance[channel] = direct_transmission(optical_thickness[channel], cos_mu);
         if mu0 <= 0.0 {
             continue;
         }
-        let cos_mu0 =
-            Cosine::new("mu0", mu0.clamp(COSINE_FLOOR, 1.0)).expect("clamped into (0, 1]");
         let irradiance = params.convention.inserted_irradiance(
             f64::from(params.light_flux) / (4.0 * std::f64::consts::PI * to_light.length_squared()),
             cos_mu0,
         );
-        let per_unit = if lit {
-            single_scattered_reflected_radiance(optical_thickness, unit, cos_mu0, cos_mu)
+        let single = if lit {
+            single_scattered_reflected_radiance(optical_thickness[channel], unit, cos_mu0, cos_mu)
         } else {
-            single_scattered_transmitted_radiance(optical_thickness, unit, cos_mu0, cos_mu)
+            single_scattered_transmitted_radiance(optical_thickness[channel], unit, cos_mu0, cos_mu)
         };
-        radiance[channel] = per_unit * irradiance;
+        radiance[channel] = (single + multiple_per_albedo[channel]) * irradiance;
     }
-    (radiance, transmittance)
+    Ok((radiance, transmittance))
+}
+
+/// Λ per channel at texture coordinate `uv`: `params.albedo_scale` times the albedo texture, sampled
+/// bilinearly with clamp-to-edge from its half-float quantisation (what the GPU samples).
+pub fn albedo_at(params: &ShadingParams, uv: [f32; 2]) -> [f64; 3] {
+    let texel = sample_bilinear(&params.albedo_texture, uv, 3);
+    [0, 1, 2].map(|c| f64::from(params.albedo_scale[c]) * texel[c])
 }
 
 /// τ1 per channel at texture coordinate `uv`: `params.optical_thickness` times the thickness texture's red
@@ -94,28 +127,37 @@ pub fn optical_thickness_at(params: &ShadingParams, uv: [f32; 2]) -> [f64; 3] {
 }
 
 /// The CPU evaluation path: every vertex in parallel (each vertex independent, so the result does not
-/// depend on the thread count).
+/// depend on the thread count). Errors only for parameters [`ShadingParams::validate`] refuses.
 pub fn per_vertex_slab_values(
     mesh: &SlabMesh,
     eye: Vec3,
     params: &ShadingParams,
-) -> Vec<VertexSlab> {
+) -> Result<Vec<VertexSlab>, SlabParameterError> {
     let eye = eye.as_dvec3();
+    let all_orders = matches!(params.scattering, Scattering::AllOrders(_));
     (0..mesh.positions.len())
         .into_par_iter()
         .map(|vertex| {
-            let tau = optical_thickness_at(params, mesh.uvs[vertex]);
+            let uv = mesh.uvs[vertex];
+            let tau = optical_thickness_at(params, uv);
+            // Single scattering is linear in Λ, applied per fragment: no need to sample Λ here.
+            let albedo = if all_orders {
+                albedo_at(params, uv)
+            } else {
+                [1.0; 3]
+            };
             let (radiance, transmittance) = slab_values_at(
                 Vec3::from(mesh.positions[vertex]).as_dvec3(),
                 Vec3::from(mesh.normals[vertex]).as_dvec3(),
                 tau,
+                albedo,
                 eye,
                 params,
-            );
-            VertexSlab {
+            )?;
+            Ok(VertexSlab {
                 radiance_per_albedo: radiance.map(|v| v as f32),
                 transmittance: transmittance.map(|v| v as f32),
-            }
+            })
         })
         .collect()
 }
@@ -150,20 +192,29 @@ pub fn sort_back_to_front(mesh: &SlabMesh, eye: Vec3, sorted: &mut Vec<u32>) {
 /// quantisation, matching a wgpu `Rgba16Float` texture with a linear, clamp-to-edge sampler up to the
 /// GPU's sub-texel weight precision.
 pub fn sample_bilinear_red(texture: &Texture2d, uv: [f32; 2]) -> f64 {
+    sample_bilinear(texture, uv, 1)[0]
+}
+
+/// As [`sample_bilinear_red`] for the first `channels` channels (the rest are 0).
+pub fn sample_bilinear(texture: &Texture2d, uv: [f32; 2], channels: usize) -> [f64; 4] {
     let (width, height) = (texture.width() as usize, texture.height() as usize);
-    let fetch = |x: isize, y: isize| {
+    let fetch = |x: isize, y: isize, channel: usize| {
         let x = x.clamp(0, width as isize - 1) as usize;
         let y = y.clamp(0, height as isize - 1) as usize;
-        f64::from(quantize_to_half(texture.texels()[y * width + x][0]))
+        f64::from(quantize_to_half(texture.texels()[y * width + x][channel]))
     };
     let x = f64::from(uv[0]) * width as f64 - 0.5;
     let y = f64::from(uv[1]) * height as f64 - 0.5;
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let (x0, y0) = (x0 as isize, y0 as isize);
-    let top = fetch(x0, y0) * (1.0 - fx) + fetch(x0 + 1, y0) * fx;
-    let bottom = fetch(x0, y0 + 1) * (1.0 - fx) + fetch(x0 + 1, y0 + 1) * fx;
-    top * (1.0 - fy) + bottom * fy
+    let mut result = [0.0; 4];
+    for (channel, value) in result.iter_mut().enumerate().take(channels.min(4)) {
+        let top = fetch(x0, y0, channel) * (1.0 - fx) + fetch(x0 + 1, y0, channel) * fx;
+        let bottom = fetch(x0, y0 + 1, channel) * (1.0 - fx) + fetch(x0 + 1, y0 + 1, channel) * fx;
+        *value = top * (1.0 - fy) + bottom * fy;
+    }
+    result
 }
 
 /// IEEE binary16 bits of `value`, rounded to nearest even (overflow → ∞).
@@ -269,7 +320,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| per_vertex_slab_values(&mesh, eye, &params))
+                .install(|| per_vertex_slab_values(&mesh, eye, &params).unwrap())
         };
         let single = run(1);
         assert_eq!(single, run(4));

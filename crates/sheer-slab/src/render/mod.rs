@@ -2,7 +2,17 @@
 //! evaluation paths the paper measures (per fragment, per vertex in the vertex shader, per vertex on the
 //! CPU) and the traditional baseline (diffuse BRDF, constant α = 0.2), blended as eq. (9)
 //! (`L_dst·α_src + L_src`) over a background, triangles sorted back to front every frame, into a linear
-//! float target that is read back.
+//! float target that is read back. Each thin-slab path evaluates either scattering model of
+//! [`crate::all_orders::Scattering`].
+//!
+//! The all-orders table on the GPU: one `Rgba32Float` 2-D texture in which texel
+//! `(a·C + j, (face·T + t)·C + k)` (C = cosine cells, T = τ1 nodes) holds the four stored values
+//! `ln f` at `(μ0, μ)` nodes `(k, j), (k, j+1), (k+1, j), (k+1, j+1)` of τ1 node `t` and albedo node `a`,
+//! so one `textureLoad` returns a whole (μ0, μ) cell and a quadrilinear lookup takes four loads; a second
+//! texture holds per τ1 cell the albedo warps `(e^β − 1, 1/β)` of its two nodes, and a uniform the axes. Interpolation
+//! weights are computed in the shader exactly as the CPU sampler does (multilinear in `ln f`), so the
+//! paths agree to `f32` rounding; rgba32float is not filterable on every adapter, and hardware filtering
+//! would quantise weights (8 bits on lavapipe).
 //!
 //! Adapter choice: `WGPU_BACKEND` if set, else Vulkan (Mesa lavapipe on a machine without a GPU) and then
 //! GL (llvmpipe over EGL); the first adapter of the preferred backend wins, hardware before software.
@@ -17,16 +27,17 @@ use bytemuck::{Pod, Zeroable};
 use thiserror::Error;
 
 pub use cpu::{
-    COSINE_FLOOR, VertexSlab, f16_bits_to_f32, f32_to_f16_bits, lit_side_cosines,
-    optical_thickness_at, per_vertex_slab_values, quantize_to_half, sample_bilinear_red,
-    slab_values_at, sort_back_to_front,
+    COSINE_FLOOR, VertexSlab, albedo_at, f16_bits_to_f32, f32_to_f16_bits, lit_side_cosines,
+    optical_thickness_at, per_vertex_slab_values, quantize_to_half, sample_bilinear,
+    sample_bilinear_red, slab_values_at, sort_back_to_front,
 };
 pub use scene::{
     Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams, SlabMesh, Texture2d,
     linear_to_srgb8,
 };
 
-use crate::model::IrradianceConvention;
+use crate::all_orders::{AllOrdersTable, Scattering, TableFace};
+use crate::model::{IrradianceConvention, SlabParameterError};
 
 const SHADER_BODY: &str = include_str!("../../../../shaders/thin_slab.wgsl");
 const LIT_SIDE: &str = include_str!("../../../../shaders/lit_side.wgsl");
@@ -133,6 +144,21 @@ pub enum RenderError {
         "optical thickness differs between channels but the adapter has no dual-source blending"
     )]
     PerChannelAlphaUnsupported,
+    /// A model parameter the CPU path refused (only for parameters that validation lets through).
+    #[error("model: {0}")]
+    Model(#[from] SlabParameterError),
+    /// The all-orders table does not fit in one texture of this device.
+    #[error(
+        "the all-orders table needs a {width}x{height} texture; the device allows {max} per side"
+    )]
+    TableTooLarge {
+        /// Texture width.
+        width: u32,
+        /// Texture height.
+        height: u32,
+        /// The device's maximum 2-D texture dimension.
+        max: u32,
+    },
 }
 
 /// The linear render target's format.
@@ -142,6 +168,15 @@ pub enum TargetFormat {
     Rgba32Float,
     /// 16-bit float per channel (relative precision 2^-11).
     Rgba16Float,
+}
+
+/// A pipeline variant: path, dual-source output (per-channel τ1), thickness texture, all-orders model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PipelineKey {
+    path: EvaluationPath,
+    dual: bool,
+    thickness: bool,
+    all_orders: bool,
 }
 
 #[repr(C)]
@@ -171,6 +206,26 @@ struct GpuTexture {
     source: Option<Texture2d>,
 }
 
+/// Axes of the all-orders table as the shader reads them (`AllOrdersAxes` in `thin_slab.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct AllOrdersAxes {
+    /// x: `c0 = ln τmin + τmin`; y: `1/(c1 − c0)`; z: τ1 cells; w: albedo cells.
+    tau: [f32; 4],
+    /// x: cosine cells C; y: texture rows per face (τ1 nodes × C).
+    cosine: [f32; 4],
+}
+
+/// The all-orders table on the GPU (see the module docs), with the table it was made from.
+struct GpuTable {
+    _cells: wgpu::Texture,
+    cells_view: wgpu::TextureView,
+    _warp: wgpu::Texture,
+    warp_view: wgpu::TextureView,
+    axes: wgpu::Buffer,
+    source: Option<Arc<AllOrdersTable>>,
+}
+
 /// A renderer without a window: renders into a linear float texture and reads it back.
 pub struct HeadlessRenderer {
     device: wgpu::Device,
@@ -189,11 +244,12 @@ pub struct HeadlessRenderer {
     bind_group_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     modules: HashMap<bool, wgpu::ShaderModule>,
-    pipelines: HashMap<(EvaluationPath, bool, bool), wgpu::RenderPipeline>,
+    pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
     background_pipeline: Option<wgpu::RenderPipeline>,
     albedo: GpuTexture,
     thickness: GpuTexture,
     background: GpuTexture,
+    table: GpuTable,
     vertex_buffer: Option<(wgpu::Buffer, usize)>,
     cpu_buffer: Option<(wgpu::Buffer, usize)>,
     index_buffer: Option<(wgpu::Buffer, usize)>,
@@ -337,6 +393,16 @@ impl HeadlessRenderer {
             },
             count: None,
         };
+        let table_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("slab bindings"),
             entries: &[
@@ -359,6 +425,19 @@ impl HeadlessRenderer {
                     count: None,
                 },
                 texture_entry(4, false),
+                // The all-orders table: also read by the compute check of the lookup.
+                table_entry(5),
+                table_entry(6),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 7,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -373,6 +452,15 @@ impl HeadlessRenderer {
             Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba16Float);
         let background =
             Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba32Float);
+        // Single scattering binds a 1×1 stand-in for the table (the layout needs one).
+        let table = Self::upload_table_textures(
+            &device,
+            &queue,
+            (1, 1, &[0.0; 4]),
+            (1, &[0.0; 4]),
+            AllOrdersAxes::zeroed(),
+            None,
+        );
         let mut renderer = Self {
             device,
             queue,
@@ -395,6 +483,7 @@ impl HeadlessRenderer {
             albedo,
             thickness,
             background,
+            table,
             vertex_buffer: None,
             cpu_buffer: None,
             index_buffer: None,
@@ -449,6 +538,22 @@ impl HeadlessRenderer {
         background: &Background,
         path: EvaluationPath,
     ) -> Result<(), RenderError> {
+        self.render_frame_timed(mesh, camera, shading, background, path)
+            .map(|_| ())
+    }
+
+    /// [`render_frame`](Self::render_frame), returning how long the GPU took: from submitting the
+    /// frame's commands until it has finished them. Everything before (sort, per-path evaluation,
+    /// staging the uploads, encoding) is CPU work; wgpu copies staged uploads at submit, so the
+    /// transfers count as GPU time.
+    pub fn render_frame_timed(
+        &mut self,
+        mesh: &SlabMesh,
+        camera: &Camera,
+        shading: &ShadingParams,
+        background: &Background,
+        path: EvaluationPath,
+    ) -> Result<std::time::Duration, RenderError> {
         mesh.validate()?;
         shading.validate()?;
         let dual = !shading.grey_optical_thickness();
@@ -456,39 +561,23 @@ impl HeadlessRenderer {
             return Err(RenderError::PerChannelAlphaUnsupported);
         }
         self.update_textures(shading, background)?;
+        if let Scattering::AllOrders(table) = &shading.scattering {
+            self.update_table(table)?;
+        }
         let uniform = self.frame_uniform(camera, shading, background);
         self.queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
-        self.upload_mesh(mesh, camera, shading, path);
-        let thickness = shading.thickness_texture.is_some();
-        self.pipeline(path, dual, thickness)?;
-
-        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("slab bind group"),
-            layout: &self.bind_group_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&self.albedo.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&self.thickness.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&self.background.view),
-                },
-            ],
-        });
+        self.upload_mesh(mesh, camera, shading, path)?;
+        let key = PipelineKey {
+            path,
+            dual,
+            thickness: shading.thickness_texture.is_some(),
+            // The baseline ignores the scattering model.
+            all_orders: path != EvaluationPath::Baseline
+                && matches!(shading.scattering, Scattering::AllOrders(_)),
+        };
+        self.pipeline(key)?;
+        let bind_group = self.bind_group();
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -516,7 +605,7 @@ impl HeadlessRenderer {
                 pass.set_pipeline(background_pipeline);
                 pass.draw(0..3, 0..1);
             }
-            let pipeline = &self.pipelines[&(path, dual, thickness)];
+            let pipeline = &self.pipelines[&key];
             pass.set_pipeline(pipeline);
             if let Some((buffer, _)) = &self.vertex_buffer {
                 pass.set_vertex_buffer(0, buffer.slice(..));
@@ -531,11 +620,14 @@ impl HeadlessRenderer {
             }
             pass.draw_indexed(0..mesh.indices.len() as u32, 0, 0..1);
         }
+        let submitted = std::time::Instant::now();
         self.queue.submit([encoder.finish()]);
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|error| RenderError::Gpu(error.to_string()))?;
-        self.take_uncaptured()
+        let gpu = submitted.elapsed();
+        self.take_uncaptured()?;
+        Ok(gpu)
     }
 
     /// Reads the last rendered frame back as linear radiance.
@@ -613,7 +705,37 @@ impl HeadlessRenderer {
         &mut self,
         samples: &[[f32; 3]],
     ) -> Result<Vec<[f32; 3]>, RenderError> {
-        if samples.is_empty() {
+        let inputs: Vec<[f32; 4]> = samples.iter().map(|&[t, m0, m]| [t, m0, m, 0.0]).collect();
+        let outputs = self.run_model_check("cs_model_check", None, &inputs)?;
+        Ok(outputs.iter().map(|v| [v[0], v[1], v[2]]).collect())
+    }
+
+    /// Evaluates the shader's all-orders lookup (`all_orders_log_value` in `shaders/thin_slab.wgsl`) on
+    /// the GPU with `table` uploaded as the renderer uploads it, for samples `(τ1, Λ, μ0, μ)` (τ1 in the
+    /// table's range, Λ, μ0, μ in [0, 1]). Returns per sample `(L_m reflected, L_m transmitted,
+    /// ln f reflected, ln f transmitted)`: the multiply-scattered radiance per unit irradiance normal to
+    /// the beam, `L_m = Λ² μ0 e^{ln f}` (sr⁻¹), and the interpolated logarithm, for checking against the
+    /// CPU sampler.
+    pub fn evaluate_shader_all_orders(
+        &mut self,
+        table: &Arc<AllOrdersTable>,
+        samples: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>, RenderError> {
+        self.update_table(table)?;
+        let bind_group = self.bind_group();
+        self.run_model_check("cs_all_orders_check", Some(&bind_group), samples)
+    }
+
+    /// Runs a compute entry point of `shaders/slab_model_check.wgsl` over `inputs` (one `vec4` in, one
+    /// out); `frame_bindings` binds the renderer's group 0 (with its explicit layout) when the entry point
+    /// reads it.
+    fn run_model_check(
+        &mut self,
+        entry_point: &str,
+        frame_bindings: Option<&wgpu::BindGroup>,
+        inputs: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>, RenderError> {
+        if inputs.is_empty() {
             return Ok(Vec::new());
         }
         let source = format!("{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{MODEL_CHECK}");
@@ -624,21 +746,44 @@ impl HeadlessRenderer {
                 label: Some("slab model check"),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
+        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let check_layout = self
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("model check"),
+                entries: &[storage(0, true), storage(1, false)],
+            });
+        let layout = frame_bindings.map(|_| {
+            self.device
+                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("model check"),
+                    bind_group_layouts: &[Some(&self.bind_group_layout), Some(&check_layout)],
+                    immediate_size: 0,
+                })
+        });
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("slab model check"),
-                layout: None,
+                layout: layout.as_ref(),
                 module: &module,
-                entry_point: Some("cs_model_check"),
+                entry_point: Some(entry_point),
                 compilation_options: Default::default(),
                 cache: None,
             });
         if let Some(error) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(format!("model check shader: {error}")));
         }
-        let inputs: Vec<[f32; 4]> = samples.iter().map(|&[t, m0, m]| [t, m0, m, 0.0]).collect();
-        let size = std::mem::size_of_val(inputs.as_slice()) as u64;
+        let size = std::mem::size_of_val(inputs) as u64;
         let input_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("model inputs"),
             size,
@@ -646,7 +791,7 @@ impl HeadlessRenderer {
             mapped_at_creation: false,
         });
         self.queue
-            .write_buffer(&input_buffer, 0, bytemuck::cast_slice(&inputs));
+            .write_buffer(&input_buffer, 0, bytemuck::cast_slice(inputs));
         let output_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("model outputs"),
             size,
@@ -659,19 +804,27 @@ impl HeadlessRenderer {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
+        let check_bindings = [
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: input_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: output_buffer.as_entire_binding(),
+            },
+        ];
+        let derived_layout;
+        let check_group_layout = if frame_bindings.is_some() {
+            &check_layout
+        } else {
+            derived_layout = pipeline.get_bind_group_layout(1);
+            &derived_layout
+        };
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("model check"),
-            layout: &pipeline.get_bind_group_layout(1),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: input_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: output_buffer.as_entire_binding(),
-                },
-            ],
+            layout: check_group_layout,
+            entries: &check_bindings,
         });
         let mut encoder = self
             .device
@@ -684,14 +837,16 @@ impl HeadlessRenderer {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&pipeline);
+            if let Some(frame) = frame_bindings {
+                pass.set_bind_group(0, frame, &[]);
+            }
             pass.set_bind_group(1, &bind_group, &[]);
-            pass.dispatch_workgroups((samples.len() as u32).div_ceil(64), 1, 1);
+            pass.dispatch_workgroups((inputs.len() as u32).div_ceil(64), 1, 1);
         }
         encoder.copy_buffer_to_buffer(&output_buffer, 0, &readback, 0, size);
         self.queue.submit([encoder.finish()]);
         let bytes = self.map_and_read(&readback)?;
-        let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-        Ok(values.iter().map(|v| [v[0], v[1], v[2]]).collect())
+        Ok(bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes))
     }
 
     fn map_and_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
@@ -829,6 +984,177 @@ impl HeadlessRenderer {
         Ok(())
     }
 
+    fn bind_group(&self) -> wgpu::BindGroup {
+        fn texture(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: wgpu::BindingResource::TextureView(view),
+            }
+        }
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("slab bind group"),
+            layout: &self.bind_group_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.uniform.as_entire_binding(),
+                },
+                texture(1, &self.albedo.view),
+                texture(2, &self.thickness.view),
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                texture(4, &self.background.view),
+                texture(5, &self.table.cells_view),
+                texture(6, &self.table.warp_view),
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: self.table.axes.as_entire_binding(),
+                },
+            ],
+        })
+    }
+
+    /// Uploads the all-orders table unless it is the one already on the GPU.
+    fn update_table(&mut self, table: &Arc<AllOrdersTable>) -> Result<(), RenderError> {
+        if self
+            .table
+            .source
+            .as_ref()
+            .is_some_and(|uploaded| Arc::ptr_eq(uploaded, table) || uploaded == table)
+        {
+            return Ok(());
+        }
+        let spec = table.spec();
+        let (taus, albedos, cosines) = (spec.tau_count, spec.albedo_count, spec.cosine_count);
+        let cells = cosines - 1;
+        let (width, height) = (albedos * cells, 2 * taus * cells);
+        let max = self.device.limits().max_texture_dimension_2d;
+        if width > max as usize || height > max as usize {
+            return Err(RenderError::TableTooLarge {
+                width: width.min(u32::MAX as usize) as u32,
+                height: height.min(u32::MAX as usize) as u32,
+                max,
+            });
+        }
+        // Texel (a·C + j, (face·T + t)·C + k) = ln f at (μ0, μ) nodes (k, j), (k, j+1), (k+1, j),
+        // (k+1, j+1); the stored layout is [face][tau][albedo][mu0][mu].
+        let values = table.log_values();
+        let mut texels = vec![0.0f32; 4 * width * height];
+        for face in [TableFace::Reflected, TableFace::Transmitted] {
+            let face = face as usize;
+            for t in 0..taus {
+                for a in 0..albedos {
+                    let block = ((face * taus + t) * albedos + a) * cosines * cosines;
+                    let value = |k: usize, j: usize| values[block + k * cosines + j];
+                    for k in 0..cells {
+                        for j in 0..cells {
+                            let (x, y) = (a * cells + j, (face * taus + t) * cells + k);
+                            let texel = 4 * (y * width + x);
+                            texels[texel..texel + 4].copy_from_slice(&[
+                                value(k, j),
+                                value(k, j + 1),
+                                value(k + 1, j),
+                                value(k + 1, j + 1),
+                            ]);
+                        }
+                    }
+                }
+            }
+        }
+        // Texel t: the albedo warps (e^β − 1, 1/β) of τ1 nodes t and t + 1 (one load per τ1 cell).
+        let warps: Vec<[f32; 2]> = table
+            .albedo_warp_strengths()
+            .iter()
+            .map(|&beta| [beta.exp_m1() as f32, (1.0 / beta) as f32])
+            .collect();
+        let warp: Vec<f32> = warps
+            .windows(2)
+            .flat_map(|pair| [pair[0][0], pair[0][1], pair[1][0], pair[1][1]])
+            .collect();
+        let (c0, c1) = table.tau_coordinate_range();
+        let axes = AllOrdersAxes {
+            tau: [
+                c0 as f32,
+                (1.0 / (c1 - c0)) as f32,
+                (taus - 1) as f32,
+                (albedos - 1) as f32,
+            ],
+            cosine: [cells as f32, (taus * cells) as f32, 0.0, 0.0],
+        };
+        self.table = Self::upload_table_textures(
+            &self.device,
+            &self.queue,
+            (width as u32, height as u32, &texels),
+            ((taus - 1) as u32, &warp),
+            axes,
+            Some(Arc::clone(table)),
+        );
+        Ok(())
+    }
+
+    fn upload_table_textures(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (width, height, cells): (u32, u32, &[f32]),
+        (warp_width, warp): (u32, &[f32]),
+        axes: AllOrdersAxes,
+        source: Option<Arc<AllOrdersTable>>,
+    ) -> GpuTable {
+        let float_texture = |label: &'static str, width: u32, height: u32, data: &[f32]| {
+            let size = wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            };
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                bytemuck::cast_slice(data),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(width * 16),
+                    rows_per_image: Some(height),
+                },
+                size,
+            );
+            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            (texture, view)
+        };
+        let (cells_texture, cells_view) = float_texture("all-orders table", width, height, cells);
+        let (warp_texture, warp_view) = float_texture("all-orders warp", warp_width, 1, warp);
+        let axes_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("all-orders axes"),
+            size: std::mem::size_of::<AllOrdersAxes>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        queue.write_buffer(&axes_buffer, 0, bytemuck::bytes_of(&axes));
+        GpuTable {
+            _cells: cells_texture,
+            cells_view,
+            _warp: warp_texture,
+            warp_view,
+            axes: axes_buffer,
+            source,
+        }
+    }
+
     fn upload_texture(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -891,7 +1217,7 @@ impl HeadlessRenderer {
         camera: &Camera,
         shading: &ShadingParams,
         path: EvaluationPath,
-    ) {
+    ) -> Result<(), RenderError> {
         self.vertex_scratch.clear();
         self.vertex_scratch
             .extend((0..mesh.positions.len()).map(|i| Vertex {
@@ -919,7 +1245,7 @@ impl HeadlessRenderer {
         );
         self.sorted_indices = indices;
         if path == EvaluationPath::Cpu {
-            let values = per_vertex_slab_values(mesh, camera.eye, shading);
+            let values = per_vertex_slab_values(mesh, camera.eye, shading)?;
             Self::write_buffer(
                 &self.device,
                 &self.queue,
@@ -928,6 +1254,7 @@ impl HeadlessRenderer {
                 wgpu::BufferUsages::VERTEX,
             );
         }
+        Ok(())
     }
 
     fn write_buffer(
@@ -1016,15 +1343,16 @@ impl HeadlessRenderer {
         Ok(pipeline)
     }
 
-    fn pipeline(
-        &mut self,
-        path: EvaluationPath,
-        dual: bool,
-        thickness: bool,
-    ) -> Result<(), RenderError> {
-        if self.pipelines.contains_key(&(path, dual, thickness)) {
+    fn pipeline(&mut self, key: PipelineKey) -> Result<(), RenderError> {
+        if self.pipelines.contains_key(&key) {
             return Ok(());
         }
+        let PipelineKey {
+            path,
+            dual,
+            thickness,
+            all_orders,
+        } = key;
         let module = self.module(dual)?;
         let (vertex_entry, fragment_entry) = path.entry_points();
         let mesh_attributes =
@@ -1063,10 +1391,12 @@ impl HeadlessRenderer {
         };
         // Specialises the shader at pipeline creation: per-channel τ1 evaluates the model three times,
         // grey τ1 once; the thickness texture is sampled only when there is one (a software rasteriser
-        // would otherwise pay for the masked-off sample).
+        // would otherwise pay for the masked-off sample); the all-orders lookup exists only in
+        // all-orders pipelines, so single scattering runs exactly the code it ran before.
         let constants = [
             ("per_channel_thickness", if dual { 1.0 } else { 0.0 }),
             ("has_thickness_texture", if thickness { 1.0 } else { 0.0 }),
+            ("all_orders", if all_orders { 1.0 } else { 0.0 }),
         ];
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = self
@@ -1112,7 +1442,7 @@ impl HeadlessRenderer {
                 path.name()
             )));
         }
-        self.pipelines.insert((path, dual, thickness), pipeline);
+        self.pipelines.insert(key, pipeline);
         Ok(())
     }
 }

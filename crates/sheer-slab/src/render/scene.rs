@@ -6,6 +6,7 @@ use std::path::Path;
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 use thiserror::Error;
 
+use crate::all_orders::{Scattering, TABLE_RANGE_SLACK, table_tau_range};
 use crate::model::IrradianceConvention;
 
 /// Why a mesh was rejected.
@@ -305,6 +306,22 @@ pub enum ShadingError {
     /// The baseline's constant α must be in [0, 1].
     #[error("baseline transmittance {0} is outside [0, 1]")]
     BaselineTransmittance(f32),
+    /// With the all-orders model, τ1 (times the thickness texture, as the GPU samples it) must lie in the
+    /// table's range.
+    #[error(
+        "optical thickness {value} (channel {channel}, times the thickness texture) lies outside the \
+         all-orders table's range [{min}, {max}]"
+    )]
+    OutsideTable {
+        /// Colour channel (0 = red).
+        channel: usize,
+        /// The smallest or largest τ1 of that channel.
+        value: f64,
+        /// Smallest τ1 of the table.
+        min: f64,
+        /// Largest τ1 of the table.
+        max: f64,
+    },
 }
 
 /// Material, light and display parameters.
@@ -329,6 +346,8 @@ pub struct ShadingParams {
     pub exposure: f32,
     /// The baseline's constant α (0.2 in the paper's figure 2).
     pub baseline_transmittance: f32,
+    /// Single scattering (the paper) or all orders (eqs. 4–5 plus the table's multiple part).
+    pub scattering: Scattering,
 }
 
 impl ShadingParams {
@@ -349,6 +368,7 @@ impl ShadingParams {
             convention: IrradianceConvention::default(),
             exposure: 1.0,
             baseline_transmittance: 0.2,
+            scattering: Scattering::Single,
         };
         params.validate()?;
         Ok(params)
@@ -398,6 +418,40 @@ impl ShadingParams {
             return Err(ShadingError::BaselineTransmittance(
                 self.baseline_transmittance,
             ));
+        }
+        if let Scattering::AllOrders(table) = &self.scattering {
+            self.validate_table_range(table_tau_range(table))?;
+        }
+        Ok(())
+    }
+
+    /// Every τ1 the renderer can meet (τ1 per channel times the half-float thickness texels, which
+    /// bilinear filtering only mixes) must lie in `[min, max]`, up to [`TABLE_RANGE_SLACK`].
+    fn validate_table_range(&self, (min, max): (f64, f64)) -> Result<(), ShadingError> {
+        let (low, high) = match &self.thickness_texture {
+            Some(texture) => texture
+                .texels
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), t| {
+                    let v = f64::from(crate::render::quantize_to_half(t[0]));
+                    (lo.min(v), hi.max(v))
+                }),
+            None => (1.0, 1.0),
+        };
+        for (channel, &tau) in self.optical_thickness.iter().enumerate() {
+            let (smallest, largest) = (f64::from(tau) * low, f64::from(tau) * high);
+            for value in [smallest, largest] {
+                if value < min * (1.0 - TABLE_RANGE_SLACK)
+                    || value > max * (1.0 + TABLE_RANGE_SLACK)
+                {
+                    return Err(ShadingError::OutsideTable {
+                        channel,
+                        value,
+                        min,
+                        max,
+                    });
+                }
+            }
         }
         Ok(())
     }

@@ -1,0 +1,180 @@
+//! Workspace-level: bad input given to the `sheer` binary is refused at once, on one line, with a
+//! failing status — scene files (out-of-range values, images that cannot be read) and arguments
+//! (times, frame counts, options that do not go together). Nothing here may hang or abort: every
+//! run is given a deadline.
+
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// Runs `sheer` with `args`; kills it and fails the test if it has not exited within `seconds`.
+fn sheer_within(args: &[&str], seconds: u64) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sheer"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the sheer binary runs");
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(seconds) {
+            child.kill().ok();
+            panic!("sheer {args:?} still ran after {seconds} s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Asserts a one-line error (`error: …`) with status `code` that contains every needle.
+fn assert_one_line_error(args: &[&str], code: i32, needles: &[&str]) {
+    let out = sheer_within(args, 60);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(code), "{args:?}: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+    assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+    for needle in needles {
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: `{stderr}` lacks `{needle}`"
+        );
+    }
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("sheer-bad-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn times_out_of_range_are_refused_before_any_simulation() {
+    let out = scratch("times").join("frame.png");
+    let out = out.to_str().unwrap();
+    // 1e9 s at 60 Hz was a loop of 4·10⁹ steps; −5 and NaN silently rendered t = 0.
+    for time in ["1e9", "3601", "-1", "-5", "NaN", "inf"] {
+        assert_one_line_error(
+            &["render", "--out", out, "--time", time],
+            1,
+            &["--time must lie in [0, 3600] s"],
+        );
+        assert_one_line_error(
+            &["figure2", "--out", out, &format!("--time={time}")],
+            1,
+            &["--time must lie in [0, 3600] s"],
+        );
+    }
+}
+
+#[test]
+fn options_that_do_not_go_together_are_one_line_usage_errors() {
+    let out = scratch("usage").join("frame.png");
+    let out = out.to_str().unwrap();
+    // --frames and --format describe a sequence; with --out they were silently ignored.
+    assert_one_line_error(
+        &["render", "--out", out, "--frames", "3"],
+        2,
+        &["--frames", "--out"],
+    );
+    assert_one_line_error(
+        &["render", "--out", out, "--format", "exr"],
+        2,
+        &["--format", "--out"],
+    );
+    // The window with --frames 0 never reached its screenshot and never exited.
+    assert_one_line_error(
+        &["--frames", "0", "--screenshot", out],
+        2,
+        &["--frames", "0"],
+    );
+    assert_one_line_error(&["--frames", "-3"], 2, &["--frames", "-3"]);
+    assert_one_line_error(&["render", "--bogus"], 2, &["--bogus"]);
+    assert_one_line_error(&["render", "--time"], 2, &["--time"]);
+    assert_one_line_error(&["simulate", "--frames", "-1"], 2, &["--frames", "-1"]);
+    assert_one_line_error(&["bench", "sim", "--threads", "-2"], 2, &["--threads"]);
+    // Missing required arguments are listed on the same line.
+    assert_one_line_error(&["figure2"], 2, &["--out"]);
+}
+
+#[test]
+fn bad_scene_values_are_refused_at_once_naming_the_key() {
+    let dir = scratch("scenes");
+    let scene = dir.join("scene.toml");
+    let out = dir.join("frame.png");
+    for (text, key) in [
+        // Aborted with an allocation failure (status 134) building the cloth.
+        ("[flag]\ncolumns = 100000\nrows = 100000\n", "flag.columns"),
+        // Hung for minutes building it.
+        ("[flag]\ncolumns = 5000\nrows = 5000\n", "flag.columns"),
+        // Stepped 1/1e30 s at a time towards the frame's time: billions of steps.
+        ("[render]\nfps = 1e30\n", "render.fps"),
+        // Wrote infinite pixels into the EXR.
+        ("[light]\nflux = 3e38\n", "light.flux"),
+        // Looked straight down: nothing drawn, no error.
+        (
+            "[camera]\nposition = [0.5, 4.0, 0.0]\ntarget = [0.5, 0.0, 0.0]\n",
+            "camera.target",
+        ),
+        // Named only `stretch`.
+        (
+            "[simulation.stretch]\ndamping = -1.0\n",
+            "simulation.stretch.damping",
+        ),
+        // The fourth component was dropped without a word.
+        (
+            "[simulation.wind]\nvelocity = [1.0, 0.0, 2.0, 5.0]\n",
+            "simulation.wind.velocity",
+        ),
+    ] {
+        std::fs::write(&scene, text).unwrap();
+        for command in ["render", "simulate"] {
+            let mut args = vec![command, "--scene", scene.to_str().unwrap()];
+            args.extend(match command {
+                "render" => ["--out", out.to_str().unwrap()],
+                _ => ["--out-dir", dir.to_str().unwrap()],
+            });
+            assert_one_line_error(&args, 1, &[key]);
+        }
+    }
+}
+
+#[test]
+fn images_that_cannot_be_read_are_errors_naming_their_key() {
+    let dir = scratch("images");
+    std::fs::write(
+        dir.join("corrupt.png"),
+        b"\x89PNG\r\n\x1a\n but no image follows",
+    )
+    .unwrap();
+    let scene = dir.join("scene.toml");
+    let out = dir.join("frame.png");
+    for (section, key) in [
+        ("[shading]\nalbedo_texture", "shading.albedo_texture"),
+        (
+            "[shading]\nalbedo_texture = \"\"\nthickness_texture",
+            "shading.thickness_texture",
+        ),
+        (
+            "[shading]\nalbedo_texture = \"\"\n[background]\nimage",
+            "background.image",
+        ),
+    ] {
+        for (image, why) in [
+            ("missing.png", "cannot read"),
+            ("corrupt.png", "cannot decode"),
+        ] {
+            std::fs::write(&scene, format!("{section} = \"{image}\"\n")).unwrap();
+            assert_one_line_error(
+                &[
+                    "render",
+                    "--scene",
+                    scene.to_str().unwrap(),
+                    "--out",
+                    out.to_str().unwrap(),
+                ],
+                1,
+                &[key, image, why],
+            );
+        }
+    }
+}
