@@ -12,19 +12,19 @@ use rayon::prelude::*;
 use crate::parallel::{DisjointSlice, fill};
 use crate::sim::{Simulation, family_index};
 
-/// One distance constraint with everything its update reads, in one cache line: the solver streams
-/// through these in colour order. Rebuilt when the sub-step length or the parameters change.
+/// One distance constraint as the solver streams it, in colour order. 32 bytes: per-family constants
+/// live in a 3-entry table and inverse masses in the particle array, so that the constraints of large
+/// cloths take half the cache and memory bandwidth a 64-byte record did (the solver streams all of
+/// them every sub-step). Rebuilt when the sub-step length or the parameters change.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PackedConstraint {
     a: u32,
     b: u32,
     rest_length: f64,
-    inverse_mass_a: f64,
-    inverse_mass_b: f64,
     /// PBD: k'/(w_a + w_b); XPBD: 1/((1 + γ)(w_a + w_b) + α̃); 0 when the constraint is inactive.
     inverse_denominator: f64,
-    scaled_compliance: f64,
-    gamma: f64,
+    /// Index into the per-family (α̃, γ) table of the sub-step.
+    family: u8,
 }
 
 /// Batches smaller than this run on one thread even in parallel mode: rayon's fork–join costs more.
@@ -74,7 +74,12 @@ impl Simulation {
                 }
             }
         }
-        self.lambdas.fill(0.0);
+        // With one iteration every multiplier is used once, right after being reset: it is always 0 when
+        // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
+        let keep_multipliers = iterations > 1;
+        if keep_multipliers {
+            self.lambdas.fill(0.0);
+        }
         // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
         // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
         let stretch_stiffness = self.family[0].0;
@@ -131,11 +136,8 @@ impl Simulation {
                     a: sp.a,
                     b: sp.b,
                     rest_length: sp.rest_length,
-                    inverse_mass_a: wa,
-                    inverse_mass_b: wb,
                     inverse_denominator,
-                    scaled_compliance,
-                    gamma,
+                    family: family_index(sp.kind) as u8,
                 }
             });
             self.denominator_key = Some(key);
@@ -150,8 +152,13 @@ impl Simulation {
             tethers,
             pinned_indices,
             params,
+            inverse_masses,
             ..
         } = self;
+        let inverse_masses = &inverse_masses[..];
+        // (α̃, γ) per family, indexed by `PackedConstraint::family`.
+        let family_constants: [(f64, f64); 3] =
+            std::array::from_fn(|f| (constants[f].1, constants[f].2));
         let long_range_attachments = params.long_range_attachments && !pinned_indices.is_empty();
         let positions = DisjointSlice::new(positions);
         let lambdas = DisjointSlice::new(lambdas);
@@ -177,18 +184,25 @@ impl Simulation {
                 -constraint * k.inverse_denominator
             } else {
                 let rate = gradient.dot((xa - previous[a]) - (xb - previous[b]));
+                let (scaled_compliance, gamma) = family_constants[k.family as usize];
                 // SAFETY: see above.
-                let lambda = unsafe { lambdas.get(c) };
-                let delta_lambda = (-constraint - k.scaled_compliance * lambda - k.gamma * rate)
+                let lambda = if keep_multipliers {
+                    unsafe { lambdas.get(c) }
+                } else {
+                    0.0
+                };
+                let delta_lambda = (-constraint - scaled_compliance * lambda - gamma * rate)
                     * k.inverse_denominator;
-                unsafe { lambdas.set(c, lambda + delta_lambda) };
+                if keep_multipliers {
+                    unsafe { lambdas.set(c, lambda + delta_lambda) };
+                }
                 delta_lambda
             };
             let step = correction * gradient;
             // SAFETY: see above.
             unsafe {
-                positions.set(a, xa + k.inverse_mass_a * step);
-                positions.set(b, xb - k.inverse_mass_b * step);
+                positions.set(a, xa + inverse_masses[a] * step);
+                positions.set(b, xb - inverse_masses[b] * step);
             }
         };
         for _ in 0..iterations {
