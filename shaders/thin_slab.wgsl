@@ -219,10 +219,14 @@ fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: v
     let mu = max(side.mu, COSINE_FLOOR);
     let mu0 = max(side.mu0, COSINE_FLOOR);
     // Irradiance normal to the beam Φ/(4πr²); eq. (6)'s surface irradiance multiplies it by μ0. A light
-    // grazing the surface (μ0 = 0) delivers nothing: the μ0 → 0 limit of eqs. (4)–(5) is 0.
-    let received = select(0.0, 1.0, side.mu0 > 0.0);
+    // grazing the surface (μ0 = 0) delivers nothing: the μ0 → 0 limit of eqs. (4)–(5) is 0. Nor does a
+    // light exactly at the point (r = 0, no direction; lit_side gives μ0 = 0): the divisor is replaced
+    // there so that 0/0 cannot make a NaN pixel.
+    let distance_squared = dot(to_light, to_light);
+    let received = select(0.0, 1.0, side.mu0 > 0.0 && distance_squared > 0.0);
     let convention_factor = select(1.0, mu0, frame.albedo_scale.w > 0.5);
-    let irradiance = received * convention_factor * frame.light.w / (4.0 * PI * dot(to_light, to_light));
+    let irradiance = received * convention_factor * frame.light.w
+        / (4.0 * PI * select(1.0, distance_squared, distance_squared > 0.0));
     var reflected: vec3<f32>;
     var transmitted: vec3<f32>;
     var transmittance: vec3<f32>;

@@ -186,7 +186,12 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
     // The quick study (12 × 9 flag, coverage over 0.25–0.5 s) end to end through the binary: a few
     // seconds. A generous coverage budget so some setting meets it and the choice file is written.
     let dir = std::env::temp_dir().join(format!("sheer-study-{}", std::process::id()));
-    let out = sheer(&[
+    // A folder holding a full study's choice (as the committed docs/ does) is refused by --quick, and
+    // left as it was; --force overrides.
+    std::fs::create_dir_all(&dir).unwrap();
+    let full = "quick = false\n";
+    std::fs::write(dir.join("choice.toml"), full).unwrap();
+    let mut args = vec![
         "study",
         "choose",
         "--quick",
@@ -194,7 +199,20 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
         "10",
         "--out",
         dir.to_str().unwrap(),
-    ]);
+    ];
+    let refused = sheer(&args);
+    assert_eq!(refused.status.code(), Some(1));
+    let stderr = String::from_utf8(refused.stderr).unwrap();
+    assert!(
+        stderr.starts_with("error: ") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("choice.toml")).unwrap(),
+        full
+    );
+    args.push("--force");
+    let out = sheer(&args);
     assert!(
         out.status.success(),
         "{}",
@@ -262,6 +280,22 @@ fn study_help_and_bad_budgets() {
         ],
         &["study", "choose", "--budget", "rms", "--budget-mm", "0"],
         &["study", "choose", "--budget", "rms", "--at", "0.3"],
+        // Never silently replaced: --at under --quick must be a quick sample time; NaN is none.
+        &["study", "choose", "--quick", "--budget", "rms", "--at", "1"],
+        &[
+            "study", "choose", "--quick", "--budget", "rms", "--at", "NaN",
+        ],
+        // Options the budget kind does not use are errors, not silently ignored.
+        &["study", "choose", "--budget-mm", "3"],
+        &["study", "choose", "--at", "0.25"],
+        &[
+            "study",
+            "choose",
+            "--budget",
+            "rms",
+            "--max-coverage-difference",
+            "0.1",
+        ],
     ] {
         let out = sheer(args);
         assert_eq!(out.status.code(), Some(1), "{args:?}");

@@ -203,6 +203,36 @@ fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
 }
 
 #[test]
+fn a_light_on_a_vertex_gives_no_nan_pixel() {
+    // The light orbit puts the light at (0, 0, 1), exactly on the sheet's centre vertex: there r = 0 and
+    // the lit side has no direction, so the vertex path must deliver no irradiance rather than 0/0.
+    let dir = scratch("light-on-vertex");
+    let scene = dir.join("sheet.toml");
+    std::fs::write(
+        &scene,
+        "[static_sheet]\nsize = [1.0, 1.0]\ncentre = [0.0, 0.0, 1.0]\nsegments = 2\n\
+         [shading]\npath = \"vertex\"\n\
+         [camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_degrees = 30.0\n\
+         [light]\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\nperiod = 0.0\nphase = 0.0\nflux = 50.0\nmarker = false\n",
+    )
+    .unwrap();
+    let out = dir.join("sheet.exr");
+    sheer_ok(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let image = read_exr(&out);
+    let bad = image
+        .pixels()
+        .filter(|p| p.0.iter().any(|v| !v.is_finite()))
+        .count();
+    assert_eq!(bad, 0, "{bad} non-finite pixels");
+}
+
+#[test]
 fn slab_command_checks_the_model_from_outside() {
     let dir = scratch("slab");
     let input = dir.join("rows.csv");

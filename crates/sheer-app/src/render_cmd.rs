@@ -10,7 +10,7 @@ use sheer_slab::render::LinearImage;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{Scene, ShadingModel};
+use crate::scene::{Scattering, Scene, ShadingModel};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ImageFormat {
@@ -160,7 +160,9 @@ pub struct Figure2Args {
     /// Output PNG.
     #[arg(long)]
     pub out: PathBuf,
-    /// Scene file (TOML); default: the shipped default scene.
+    /// Scene file (TOML); default: the shipped default scene. The thin-slab panels always use the
+    /// paper's single-scattering model with Λ = 1, τ1 = 2 (the scene's `shading.scattering`,
+    /// `optical_thickness` and `albedo_scale` are not used for them).
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Scene time at which the flag is captured, s, in [0, 3600].
@@ -194,7 +196,8 @@ pub const BACK_LIT_PHASE: f32 = std::f32::consts::PI + 0.5;
 pub const FRONT_LIT_PHASE: f32 = 0.6;
 
 /// The four panels of figure 2, in reading order: (baseline, back-lit), (baseline, front-lit),
-/// (thin-slab, back-lit), (thin-slab, front-lit), as linear images of the scene's size.
+/// (thin-slab, back-lit), (thin-slab, front-lit), as linear images of the scene's size. The thin-slab
+/// panels reproduce the paper: single scattering, Λ = 1, τ1 = 2, whatever the scene's shading says.
 pub fn figure2_panels(scene: &Scene, time: f32) -> Result<[LinearImage; 4], CliError> {
     let mut scene = scene.clone();
     scene.light.period = 0.0; // the light holds still at each panel's angle
@@ -206,7 +209,8 @@ pub fn figure2_panels(scene: &Scene, time: f32) -> Result<[LinearImage; 4], CliE
         for phase in [BACK_LIT_PHASE, FRONT_LIT_PHASE] {
             flag.scene.shading.model = model;
             if model == ShadingModel::ThinSlab {
-                // The paper's figure: Λ = 1, τ1 = 2.
+                // The paper's figure: its single-scattering model (eqs. (4)–(5)), Λ = 1, τ1 = 2.
+                flag.scene.shading.scattering = Scattering::Single;
                 flag.scene.shading.optical_thickness = [2.0; 3];
                 flag.scene.shading.albedo_scale = [1.0; 3];
             }
@@ -335,6 +339,19 @@ mod label_tests {
         assert!(labels[0].contains("α = 0.35") && labels[1].contains("α = 0.35"));
         assert!(labels.iter().all(|l| !l.contains("α = 0.2")));
         assert_eq!(figure2_labels(0.2)[0], "baseline, α = 0.2 — back-lit");
+    }
+
+    #[test]
+    fn figure2_thin_slab_panels_are_single_scattering_whatever_the_scene_says() {
+        // The captions name the paper's model; an all-orders scene must not change the panels.
+        let mut scene = Scene::builtin_default().unwrap();
+        scene.render.width = 64;
+        scene.render.height = 48;
+        scene.shading.scattering = Scattering::Single;
+        let single = figure2_panels(&scene, 0.1).unwrap();
+        scene.shading.scattering = Scattering::AllOrders;
+        let all_orders = figure2_panels(&scene, 0.1).unwrap();
+        assert_eq!(single, all_orders);
     }
 
     #[test]

@@ -12,7 +12,7 @@ use sheer_cloth::Method;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{EvaluationPathName, Scattering, Scene, ShadingModel};
+use crate::scene::{EvaluationPathName, Scattering, Scene, ShadingModel, ShadingSection};
 
 /// Options of the window from the command line.
 #[derive(Debug, Clone, Default)]
@@ -154,6 +154,12 @@ struct Fields {
 }
 
 impl Fields {
+    /// Shows the shading section's numbers in their fields (after an edit was undone).
+    fn show_shading(&mut self, shading: &ShadingSection) {
+        self.optical_thickness.text = format!("{}", shading.optical_thickness[0]);
+        self.albedo_scale.text = format!("{}", shading.albedo_scale[0]);
+    }
+
     /// Shows `method`'s knobs in their fields (after a change of method, or of one knob).
     fn show_method(&mut self, method: Method) {
         self.substeps.text = method.substeps().to_string();
@@ -325,7 +331,7 @@ impl SheerApp {
         ui.label("Thin cloth as a thin slab (Frisvad et al. 2005)");
         ui.separator();
         let mut shading_changed = false;
-        let scattering_before = self.flag.scene.shading.scattering;
+        let shading_before = self.flag.scene.shading.clone();
         egui::CollapsingHeader::new("Shading")
             .default_open(true)
             .show(ui, |ui| {
@@ -486,9 +492,13 @@ impl SheerApp {
                 }
             });
         });
-        if shading_changed && let Err(e) = self.renderer.update_shading(&self.flag.scene) {
-            // The renderer keeps its last good parameters, and the panel its scattering choice.
-            self.flag.scene.shading.scattering = scattering_before;
+        if shading_changed
+            && let Err(e) =
+                apply_shading_or_restore(&mut self.flag.scene, shading_before, |scene| {
+                    self.renderer.update_shading(scene)
+                })
+        {
+            self.fields.show_shading(&self.flag.scene.shading);
             self.notice = Some(e.to_string());
         }
         ui.separator();
@@ -654,9 +664,52 @@ pub fn run(options: WindowOptions) -> Result<(), CliError> {
         .map_err(|e| CliError::new(format!("window: {e}")))
 }
 
+/// Applies the panel's shading edits through `apply` (the renderer's update). On failure the renderer
+/// keeps its last good parameters, so the whole shading section goes back to `before`: the panel
+/// must not show a τ1 (or anything else) that the image does not use.
+fn apply_shading_or_restore(
+    scene: &mut Scene,
+    before: ShadingSection,
+    apply: impl FnOnce(&Scene) -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    let result = apply(scene);
+    if result.is_err() {
+        scene.shading = before;
+    }
+    result
+}
+
 #[cfg(test)]
 mod panel_tests {
     use super::*;
+
+    #[test]
+    fn a_refused_shading_edit_restores_the_whole_shading_section() {
+        // The τ1 field accepts [1e-3, 50] but the all-orders table covers [0.01, 10]: the renderer
+        // refuses τ1 = 20, and the panel must go back to the τ1 the image still uses.
+        let mut scene = Scene::builtin_default().unwrap();
+        scene.shading.scattering = Scattering::Single;
+        let before = scene.shading.clone();
+        scene.shading.scattering = Scattering::AllOrders;
+        scene.shading.optical_thickness = [20.0; 3];
+        let outside_table = |scene: &Scene| {
+            if scene.shading.scattering == Scattering::AllOrders
+                && scene.shading.optical_thickness.iter().any(|&t| t > 10.0)
+            {
+                Err(CliError::new("τ1 outside the table".to_string()))
+            } else {
+                Ok(())
+            }
+        };
+        let result = apply_shading_or_restore(&mut scene, before.clone(), outside_table);
+        assert!(result.is_err());
+        assert_eq!(scene.shading, before);
+
+        // An accepted edit stays.
+        scene.shading.optical_thickness = [5.0; 3];
+        apply_shading_or_restore(&mut scene, before, outside_table).unwrap();
+        assert_eq!(scene.shading.optical_thickness, [5.0; 3]);
+    }
 
     #[test]
     fn counts_typed_into_the_panel_must_be_whole_numbers() {

@@ -37,8 +37,13 @@ pub struct OutputArgs {
     #[arg(long, default_value = "docs")]
     pub out: PathBuf,
     /// Small grids and short runs (seconds instead of minutes): a smoke test, not the published study.
+    /// Refused when `--out` holds a full study (a `choice.toml` without `quick = true`, as the committed
+    /// `docs/` does), unless `--force` is given: a smoke test must not replace published results.
     #[arg(long)]
     pub quick: bool,
+    /// With `--quick`: write even into a folder that holds a full study's results.
+    #[arg(long, requires = "quick")]
+    pub force: bool,
 }
 
 /// Which error a budget bounds.
@@ -58,19 +63,25 @@ pub struct BudgetArgs {
     /// Which error the budget bounds.
     #[arg(long, value_enum, default_value_t = BudgetKind::Coverage)]
     pub budget: BudgetKind,
-    /// Coverage budget: the largest time-averaged coverage difference from the reference, as a
-    /// fraction of the reference's mean covered area.
-    #[arg(long, default_value_t = DEFAULT_COVERAGE_BUDGET)]
-    pub max_coverage_difference: f64,
-    /// RMS budget (`--budget rms`): the largest RMS position error, mm.
-    #[arg(long, default_value_t = 5.0)]
-    pub budget_mm: f64,
-    /// RMS budget: the simulated time at which it applies, s (one of the choice sweep's sample times:
-    /// 0.25 or 1). 0.25 s by default: the waving flag is chaotic, and at 1 s even its reference
+    /// Coverage budget (`--budget coverage` only): the largest time-averaged coverage difference from
+    /// the reference, as a fraction of the reference's mean covered area [default: 0.04].
+    #[arg(long)]
+    pub max_coverage_difference: Option<f64>,
+    /// RMS budget (`--budget rms` only): the largest RMS position error, mm [default: 5].
+    #[arg(long)]
+    pub budget_mm: Option<f64>,
+    /// RMS budget (`--budget rms` only): the simulated time at which it applies, s (one of the choice
+    /// sweep's sample times: 0.25 or 1; with `--quick`, 0.25 only). Default 0.25 s, or with `--quick`
+    /// the quick sweep's first sample time: the waving flag is chaotic, and at 1 s even its reference
     /// changes by centimetres when its step is halved.
-    #[arg(long, default_value_t = 0.25)]
-    pub at: f64,
+    #[arg(long)]
+    pub at: Option<f64>,
 }
+
+/// RMS budget when `--budget-mm` is not given, mm.
+const DEFAULT_BUDGET_MM: f64 = 5.0;
+/// RMS budget time when `--at` is not given (full study), s.
+const DEFAULT_BUDGET_TIME: f64 = 0.25;
 
 /// Output plus budget options.
 #[derive(Args, Clone, Debug)]
@@ -101,30 +112,42 @@ pub fn run(args: &StudyArgs) -> Result<(), StudyError> {
     let result = match &args.command {
         StudyCommand::WorkPrecision(out) => {
             let config = config(out);
-            write_work_precision(&config, &out.out, &monitor).map(|_| ())
+            check_quick_output(out)
+                .and_then(|()| write_work_precision(&config, &out.out, &monitor).map(|_| ()))
         }
-        StudyCommand::Stability(out) => write_stability(&config(out), &out.out, &monitor),
+        StudyCommand::Stability(out) => {
+            check_quick_output(out).and_then(|()| write_stability(&config(out), &out.out, &monitor))
+        }
         StudyCommand::Choose(ChoiceArgs {
             output: out,
             budget,
         }) => {
             let config = config(out);
-            write_choice(&config, &budget_of(budget, &config)?, &out.out, &monitor).map(|_| ())
+            budget_of(budget, &config).and_then(|budget| {
+                check_quick_output(out)?;
+                write_choice(&config, &budget, &out.out, &monitor).map(|_| ())
+            })
         }
         StudyCommand::Ablation(ChoiceArgs {
             output: out,
             budget,
         }) => {
             let config = config(out);
-            let measured = write_choice(&config, &budget_of(budget, &config)?, &out.out, &monitor)?;
-            write_ablation(&config, &measured, &out.out, &monitor)
+            budget_of(budget, &config).and_then(|budget| {
+                check_quick_output(out)?;
+                let measured = write_choice(&config, &budget, &out.out, &monitor)?;
+                write_ablation(&config, &measured, &out.out, &monitor)
+            })
         }
         StudyCommand::All(ChoiceArgs {
             output: out,
             budget,
         }) => {
             let config = config(out);
-            write_all(&config, &budget_of(budget, &config)?, &out.out, &monitor)
+            budget_of(budget, &config).and_then(|budget| {
+                check_quick_output(out)?;
+                write_all(&config, &budget, &out.out, &monitor)
+            })
         }
     };
     monitor.finish();
@@ -139,45 +162,113 @@ fn config(out: &OutputArgs) -> StudyConfig {
     }
 }
 
+/// With `--quick` (and no `--force`), refuses an `--out` folder whose `choice.toml` is not itself from a
+/// quick run: the quick study would overwrite (or, when no setting meets the budget, delete) a full
+/// study's published results.
+fn check_quick_output(out: &OutputArgs) -> Result<(), StudyError> {
+    if !out.quick || out.force {
+        return Ok(());
+    }
+    let path = out.out.join("choice.toml");
+    let text = read_existing(&path)?;
+    if text.is_empty() {
+        return Ok(());
+    }
+    let quick = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .and_then(|table| table.get("quick").and_then(toml::Value::as_bool));
+    if quick == Some(true) {
+        Ok(())
+    } else {
+        Err(StudyError::WouldReplaceFullStudy {
+            path: path.display().to_string(),
+        })
+    }
+}
+
+/// The text of `path`, or an empty string when it does not exist; any other read error is an error
+/// (an unreadable file must not be treated as empty and then overwritten).
+fn read_existing(path: &Path) -> Result<String, StudyError> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok(text),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(String::new()),
+        Err(e) => Err(io_error(path, e)),
+    }
+}
+
+/// An option that the chosen `--budget` kind does not use: given, it would be silently ignored.
+fn unused_option(name: &'static str, value: f64, reason: &'static str) -> StudyError {
+    StudyError::InvalidInput {
+        name,
+        value,
+        reason,
+    }
+}
+
 fn budget_of(args: &BudgetArgs, config: &StudyConfig) -> Result<Budget, StudyError> {
     if args.budget == BudgetKind::Coverage {
-        if !(args.max_coverage_difference.is_finite() && args.max_coverage_difference > 0.0) {
+        if let Some(value) = args.budget_mm {
+            return Err(unused_option(
+                "--budget-mm",
+                value,
+                "only applies with `--budget rms`",
+            ));
+        }
+        if let Some(value) = args.at {
+            return Err(unused_option(
+                "--at",
+                value,
+                "only applies with `--budget rms`",
+            ));
+        }
+        let max_difference = args
+            .max_coverage_difference
+            .unwrap_or(DEFAULT_COVERAGE_BUDGET);
+        if !(max_difference.is_finite() && max_difference > 0.0) {
             return Err(StudyError::InvalidInput {
                 name: "--max-coverage-difference",
-                value: args.max_coverage_difference,
+                value: max_difference,
                 reason: "must be finite and > 0",
             });
         }
-        return Ok(Budget::Coverage {
-            max_difference: args.max_coverage_difference,
-        });
+        return Ok(Budget::Coverage { max_difference });
     }
-    if !(args.budget_mm.is_finite() && args.budget_mm > 0.0) {
+    if let Some(value) = args.max_coverage_difference {
+        return Err(unused_option(
+            "--max-coverage-difference",
+            value,
+            "only applies with `--budget coverage`",
+        ));
+    }
+    let budget_mm = args.budget_mm.unwrap_or(DEFAULT_BUDGET_MM);
+    if !(budget_mm.is_finite() && budget_mm > 0.0) {
         return Err(StudyError::InvalidInput {
             name: "--budget-mm",
-            value: args.budget_mm,
+            value: budget_mm,
             reason: "must be finite and > 0",
         });
     }
-    // Quick runs are shorter than 1 s: the budget applies at their first sample time instead.
-    let at = if config
-        .choice_times
-        .iter()
-        .any(|t| (t - args.at).abs() < 1e-9)
-    {
-        args.at
-    } else if config.quick {
-        config.choice_times[0]
-    } else {
+    // Quick runs are shorter than 1 s: without `--at` the budget applies at their first sample time;
+    // a given `--at` must be one of the run's sample times (never silently replaced; NaN matches none).
+    let at = match args.at {
+        Some(at) => at,
+        None if config.quick => config.choice_times[0],
+        None => DEFAULT_BUDGET_TIME,
+    };
+    if !config.choice_times.iter().any(|t| (t - at).abs() < 1e-9) {
         return Err(StudyError::InvalidInput {
             name: "--at",
-            value: args.at,
-            reason: "must be one of the choice sweep's sample times (0.25 or 1 s)",
+            value: at,
+            reason: if config.quick {
+                "must be one of the quick sweep's sample times"
+            } else {
+                "must be one of the choice sweep's sample times (0.25 or 1 s)"
+            },
         });
-    };
+    }
     Ok(Budget::RmsPosition {
         time: at,
-        max_error: args.budget_mm * 1e-3,
+        max_error: budget_mm * 1e-3,
     })
 }
 
@@ -549,7 +640,7 @@ pub fn write_choice(
         );
     }
     let path = out.join("work-precision.md");
-    let mut existing = std::fs::read_to_string(&path).unwrap_or_default();
+    let mut existing = read_existing(&path)?;
     if let Some(at) = existing.find("\n# Automatic choice") {
         existing.truncate(at);
     }
@@ -558,8 +649,8 @@ pub fn write_choice(
     // Merge into work-precision.csv: replace earlier default-flag rows, keep the other scenes' (only
     // from a file with the same columns).
     let csv_path = out.join("work-precision.csv");
-    let mut csv: String = match std::fs::read_to_string(&csv_path) {
-        Ok(existing) if existing.lines().next() == Some(WORK_PRECISION_HEADER) => existing
+    let mut csv: String = match read_existing(&csv_path)? {
+        existing if existing.lines().next() == Some(WORK_PRECISION_HEADER) => existing
             .lines()
             .filter(|line| !line.starts_with("default_flag,"))
             .map(|line| format!("{line}\n"))
@@ -835,4 +926,26 @@ pub fn write_stability(
         }
     }
     write_file(&out.join("stability-map.md"), &text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_missing_file_reads_as_empty() {
+        let dir = std::env::temp_dir().join(format!("sheer-study-read-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        assert_eq!(read_existing(&dir.join("missing.md")).unwrap(), "");
+        // Not UTF-8: reading fails, and the file must not be treated as empty (then overwritten).
+        let garbled = dir.join("work-precision.md");
+        std::fs::write(&garbled, [0xff, 0xfe, b'#']).unwrap();
+        assert!(matches!(
+            read_existing(&garbled),
+            Err(StudyError::Io { .. })
+        ));
+        std::fs::write(&garbled, "# kept\n").unwrap();
+        assert_eq!(read_existing(&garbled).unwrap(), "# kept\n");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

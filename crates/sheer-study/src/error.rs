@@ -23,12 +23,17 @@ pub enum StudyError {
     Interrupted,
     #[error("cannot start the single-thread pool: {0}")]
     ThreadPool(String),
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot read or write {path}: {source}")]
     Io {
         path: String,
         #[source]
         source: std::io::Error,
     },
+    #[error(
+        "{path} is a full study's choice, which a `--quick` run would replace; choose another --out, \
+         or add --force"
+    )]
+    WouldReplaceFullStudy { path: String },
     #[error("cannot draw the chart {path}: {message}")]
     Chart { path: String, message: String },
     #[error("cannot read the chart font {path}: {message}")]

@@ -38,6 +38,12 @@ const MAGIC: &[u8; 8] = b"SHEERAOT";
 const VERSION: u32 = 1;
 /// Albedo used for the Λ = 0 node, where `L_m / Λ²` is a limit.
 const ALBEDO_FLOOR: f64 = 1.0e-8;
+/// Largest node count accepted on any axis: far above any useful grid, and small enough that the
+/// value count `2 n_tau n_albedo n_cosine²` cannot overflow `usize` (a corrupt header must not wrap).
+const MAX_AXIS_COUNT: usize = 4096;
+/// Largest τ1 a table may span: keeps the albedo warp `e^β − 1` (β = 1.1 ln(1 + τ1)) finite and far
+/// beyond the optically thick limit the table is for.
+const MAX_TABLE_TAU: f64 = 1.0e3;
 
 /// Grid sizes of a table. [`TableSpec::default`] is the one shipped in the workspace's `assets/`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -73,10 +79,32 @@ impl TableSpec {
                 "need at least 2 tau, 2 albedo and 3 cosine nodes".into(),
             ));
         }
-        if !(self.tau_min > 0.0 && self.tau_max.is_finite() && self.tau_min < self.tau_max) {
-            return Err(TransportError::TableFormat("invalid tau range".into()));
+        if [self.tau_count, self.albedo_count, self.cosine_count]
+            .iter()
+            .any(|&count| count > MAX_AXIS_COUNT)
+        {
+            return Err(TransportError::TableFormat(format!(
+                "node counts ({}, {}, {}) exceed the limit {MAX_AXIS_COUNT}",
+                self.tau_count, self.albedo_count, self.cosine_count
+            )));
         }
+        if !(self.tau_min > 0.0 && self.tau_min < self.tau_max && self.tau_max <= MAX_TABLE_TAU) {
+            return Err(TransportError::TableFormat(format!(
+                "invalid tau range [{}, {}]: need 0 < tau_min < tau_max <= {MAX_TABLE_TAU}",
+                self.tau_min, self.tau_max
+            )));
+        }
+        self.checked_values_per_side()
+            .and_then(|n| n.checked_mul(2))
+            .ok_or_else(|| TransportError::TableFormat("table size overflows".into()))?;
         Ok(())
+    }
+
+    /// `values_per_side` with overflow checked (used by validation, before any allocation).
+    fn checked_values_per_side(&self) -> Option<usize> {
+        self.tau_count
+            .checked_mul(self.albedo_count)?
+            .checked_mul(self.cosine_count.checked_mul(self.cosine_count)?)
     }
 
     /// τ1 at fractional node position `position` ∈ [0, tau_count − 1] (nodes are uniform in
@@ -358,7 +386,11 @@ impl AllOrdersTable {
             tau_max: read_f64(bytes, 32)?,
         };
         spec.validate()?;
-        let expected = HEADER_BYTES + 4 * 2 * spec.values_per_side();
+        let expected = spec
+            .checked_values_per_side()
+            .and_then(|n| n.checked_mul(2 * 4))
+            .and_then(|n| n.checked_add(HEADER_BYTES))
+            .ok_or_else(|| TransportError::TableFormat("table size overflows".into()))?;
         if bytes.len() != expected {
             return Err(TransportError::TableFormat(format!(
                 "expected {expected} bytes, found {}",
@@ -369,6 +401,13 @@ impl AllOrdersTable {
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
+        if values.len() != 2 * spec.values_per_side() {
+            return Err(TransportError::TableFormat(format!(
+                "expected {} values, found {}",
+                2 * spec.values_per_side(),
+                values.len()
+            )));
+        }
         if values.iter().any(|v| !v.is_finite()) {
             return Err(TransportError::TableFormat("non-finite value".into()));
         }

@@ -43,6 +43,48 @@ fn malformed_files_are_rejected() {
     ));
 }
 
+/// A header with the given counts and τ1 range and no values.
+fn header_only(counts: [u32; 3], tau_range: (f64, f64)) -> Vec<u8> {
+    let mut bytes = b"SHEERAOT".to_vec();
+    bytes.extend_from_slice(&1u32.to_le_bytes());
+    for count in counts {
+        bytes.extend_from_slice(&count.to_le_bytes());
+    }
+    bytes.extend_from_slice(&tau_range.0.to_le_bytes());
+    bytes.extend_from_slice(&tau_range.1.to_le_bytes());
+    bytes
+}
+
+#[test]
+fn header_with_wrapping_counts_is_rejected() {
+    // 2 · 2 · (2^31)² · 2 sides wraps to 0 values in 64-bit arithmetic: a header-only file must not parse.
+    let bytes = header_only([2, 2, 1 << 31], (0.01, 10.0));
+    assert!(matches!(
+        AllOrdersTable::from_bytes(&bytes),
+        Err(TransportError::TableFormat(_))
+    ));
+}
+
+#[test]
+fn huge_tau_range_is_rejected() {
+    // τ1 = 1e300 makes the albedo warp e^β − 1 infinite; the range must be refused up front.
+    let table = shipped();
+    let mut bytes = table.to_bytes();
+    bytes[32..40].copy_from_slice(&1.0e300f64.to_le_bytes());
+    assert!(matches!(
+        AllOrdersTable::from_bytes(&bytes),
+        Err(TransportError::TableFormat(_))
+    ));
+    let spec = TableSpec {
+        tau_max: 1.0e300,
+        ..TableSpec::default()
+    };
+    assert!(matches!(
+        AllOrdersTable::generate(spec),
+        Err(TransportError::TableFormat(_))
+    ));
+}
+
 #[test]
 fn table_reproduces_solver_at_nodes() {
     // At nodes only storage rounding remains: ln f in f32 with |ln f| < 16 carries an absolute error
