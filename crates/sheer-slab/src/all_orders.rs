@@ -23,8 +23,7 @@ pub use sheer_transport::{AllOrdersTable, TableFace, TransportError};
 
 use crate::model::{
     Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness, SlabParameterError,
-    SlabShading, direct_transmission, single_scattered_reflected_radiance,
-    single_scattered_transmitted_radiance,
+    SlabShading, shading_from_diffuse_radiance, single_scattered_radiance,
 };
 
 /// Which orders of scattering the slab's diffuse radiance includes.
@@ -184,10 +183,7 @@ pub fn diffuse_radiance(
     mu0: Cosine,
     mu: Cosine,
 ) -> Result<f64, SlabParameterError> {
-    let single = match side {
-        LitSide::Front => single_scattered_reflected_radiance(optical_thickness, albedo, mu0, mu),
-        LitSide::Back => single_scattered_transmitted_radiance(optical_thickness, albedo, mu0, mu),
-    };
+    let single = single_scattered_radiance(side, optical_thickness, albedo, mu0, mu);
     match scattering {
         Scattering::Single => Ok(single),
         Scattering::AllOrders(table) => {
@@ -217,15 +213,14 @@ pub fn slab_shading_with(
     beam_normal_irradiance: f64,
     convention: IrradianceConvention,
 ) -> Result<SlabShading, SlabParameterError> {
-    if !(beam_normal_irradiance.is_finite() && beam_normal_irradiance >= 0.0) {
-        return Err(SlabParameterError::Irradiance(beam_normal_irradiance));
-    }
-    let irradiance = convention.inserted_irradiance(beam_normal_irradiance, mu0);
-    let per_unit = diffuse_radiance(scattering, side, optical_thickness, albedo, mu0, mu)?;
-    Ok(SlabShading {
-        source_radiance: per_unit * irradiance,
-        transmittance: direct_transmission(optical_thickness, mu),
-    })
+    shading_from_diffuse_radiance(
+        optical_thickness,
+        mu0,
+        mu,
+        beam_normal_irradiance,
+        convention,
+        || diffuse_radiance(scattering, side, optical_thickness, albedo, mu0, mu),
+    )
 }
 
 #[cfg(test)]

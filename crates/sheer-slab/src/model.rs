@@ -298,6 +298,21 @@ impl SlabShading {
     }
 }
 
+/// Eq. (4) on the lit face (`Front`), eq. (5) on the far face (`Back`): the single-scattered radiance on
+/// the face the eye is on, per unit irradiance normal to the beam (sr⁻¹).
+pub fn single_scattered_radiance(
+    side: LitSide,
+    optical_thickness: OpticalThickness,
+    albedo: Albedo,
+    mu0: Cosine,
+    mu: Cosine,
+) -> f64 {
+    match side {
+        LitSide::Front => single_scattered_reflected_radiance(optical_thickness, albedo, mu0, mu),
+        LitSide::Back => single_scattered_transmitted_radiance(optical_thickness, albedo, mu0, mu),
+    }
+}
+
 /// The model at one point: α and `L±·E(0)` for the side the eye is on; `beam_normal_irradiance` in W/m².
 pub fn slab_shading(
     optical_thickness: OpticalThickness,
@@ -308,16 +323,41 @@ pub fn slab_shading(
     beam_normal_irradiance: f64,
     convention: IrradianceConvention,
 ) -> Result<SlabShading, SlabParameterError> {
+    shading_from_diffuse_radiance(
+        optical_thickness,
+        mu0,
+        mu,
+        beam_normal_irradiance,
+        convention,
+        || {
+            Ok(single_scattered_radiance(
+                side,
+                optical_thickness,
+                albedo,
+                mu0,
+                mu,
+            ))
+        },
+    )
+}
+
+/// Eq. (9)'s two terms from a diffuse radiance per unit irradiance (computed by `diffuse_per_unit`, after
+/// the irradiance is checked): `L·E(0)` with the convention's inserted irradiance, and α = exp(−τ1/μ).
+/// Shared by both scattering models, so they differ only in that radiance.
+pub(crate) fn shading_from_diffuse_radiance(
+    optical_thickness: OpticalThickness,
+    mu0: Cosine,
+    mu: Cosine,
+    beam_normal_irradiance: f64,
+    convention: IrradianceConvention,
+    diffuse_per_unit: impl FnOnce() -> Result<f64, SlabParameterError>,
+) -> Result<SlabShading, SlabParameterError> {
     if !(beam_normal_irradiance.is_finite() && beam_normal_irradiance >= 0.0) {
         return Err(SlabParameterError::Irradiance(beam_normal_irradiance));
     }
     let irradiance = convention.inserted_irradiance(beam_normal_irradiance, mu0);
-    let per_unit = match side {
-        LitSide::Front => single_scattered_reflected_radiance(optical_thickness, albedo, mu0, mu),
-        LitSide::Back => single_scattered_transmitted_radiance(optical_thickness, albedo, mu0, mu),
-    };
     Ok(SlabShading {
-        source_radiance: per_unit * irradiance,
+        source_radiance: diffuse_per_unit()? * irradiance,
         transmittance: direct_transmission(optical_thickness, mu),
     })
 }
