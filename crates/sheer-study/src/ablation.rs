@@ -100,12 +100,7 @@ pub fn ablation(
     grids: &[(usize, usize)],
     monitor: &Monitor,
 ) -> Result<Vec<AblationRow>, StudyError> {
-    let times: Vec<f64> = reference
-        .trajectory
-        .snapshots
-        .iter()
-        .map(|s| s.time)
-        .collect();
+    let times = reference.trajectory.snapshot_times();
     let attachments = scene.params.long_range_attachments;
     let mut variants = vec![
         Variant {

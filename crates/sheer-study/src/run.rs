@@ -52,6 +52,11 @@ impl Trajectory {
         }
     }
 
+    /// Simulated times of the snapshots, s, in order.
+    pub fn snapshot_times(&self) -> Vec<f64> {
+        self.snapshots.iter().map(|s| s.time).collect()
+    }
+
     /// The snapshot taken at `time` (within half a step), if the run got there.
     pub fn at(&self, time: f64) -> Option<&Snapshot> {
         self.snapshots

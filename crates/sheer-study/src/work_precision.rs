@@ -178,12 +178,7 @@ pub fn work_precision(
     sweep: &Sweep,
     monitor: &Monitor,
 ) -> Result<Vec<Row>, StudyError> {
-    let times: Vec<f64> = reference
-        .trajectory
-        .snapshots
-        .iter()
-        .map(|s| s.time)
-        .collect();
+    let times = reference.trajectory.snapshot_times();
     monitor.add_work(sweep.methods.len() as u64);
     let mut rows = Vec::new();
     for &method in &sweep.methods {
