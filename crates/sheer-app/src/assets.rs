@@ -1116,37 +1116,33 @@ mod tests {
         assert!(flag.pixels().any(|p| !pure.contains(&p.0)));
     }
 
-    /// Mean sRGB colour of a `size`-px square around (u, v).
-    fn patch_mean(image: &RgbImage, u: f64, v: f64, size: u32) -> [f64; 3] {
+    /// The pixels of a `size`-px square around (u, v).
+    fn patch(image: &RgbImage, u: f64, v: f64, size: u32) -> impl Iterator<Item = [u8; 3]> + '_ {
         let (cx, cy) = (
             (u * f64::from(image.width())) as u32,
             (v * f64::from(image.height())) as u32,
         );
+        (cy - size / 2..cy + size / 2)
+            .flat_map(move |y| (cx - size / 2..cx + size / 2).map(move |x| pixel(image, x, y)))
+    }
+
+    /// Mean sRGB colour of a `size`-px square around (u, v).
+    fn patch_mean(image: &RgbImage, u: f64, v: f64, size: u32) -> [f64; 3] {
         let mut sum = [0.0; 3];
         let mut n = 0.0;
-        for y in cy - size / 2..cy + size / 2 {
-            for x in cx - size / 2..cx + size / 2 {
-                let p = pixel(image, x, y);
-                for c in 0..3 {
-                    sum[c] += f64::from(p[c]);
-                }
-                n += 1.0;
+        for p in patch(image, u, v, size) {
+            for c in 0..3 {
+                sum[c] += f64::from(p[c]);
             }
+            n += 1.0;
         }
         sum.map(|s| s / n)
     }
 
+    /// Standard deviation of the luminance over a `size`-px square around (u, v), of 255.
     fn luminance_spread(image: &RgbImage, u: f64, v: f64, size: u32) -> f64 {
-        let (cx, cy) = (
-            (u * f64::from(image.width())) as u32,
-            (v * f64::from(image.height())) as u32,
-        );
-        let values: Vec<f64> = (cy - size / 2..cy + size / 2)
-            .flat_map(|y| (cx - size / 2..cx + size / 2).map(move |x| (x, y)))
-            .map(|(x, y)| {
-                let p = pixel(image, x, y);
-                0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
-            })
+        let values: Vec<f64> = patch(image, u, v, size)
+            .map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]))
             .collect();
         let mean = values.iter().sum::<f64>() / values.len() as f64;
         (values.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / values.len() as f64).sqrt()
