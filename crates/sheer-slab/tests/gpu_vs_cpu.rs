@@ -97,17 +97,14 @@ impl Sheet {
     }
 }
 
-/// The CPU model at a point of a sheet lit by a point light (position, flux Φ in W), grey τ1 and Λ:
-/// (L_source, α), straight from `sheer_slab::model`.
-fn model_at(
+/// The paper's convention at a point of a sheet lit by a point light at `light`: the normal turned toward
+/// the light (μ0 > 0), then (μ0, |μ|, the side the eye is on, distance to the light in m).
+fn shading_geometry(
     point: DVec3,
     normal: DVec3,
     eye: DVec3,
-    (light, flux): (DVec3, f64),
-    tau: f64,
-    albedo: f64,
-    convention: IrradianceConvention,
-) -> (f64, f64) {
+    light: DVec3,
+) -> (f64, f64, LitSide, f64) {
     let to_light = light - point;
     let mut n = normal.normalize();
     if n.dot(to_light) < 0.0 {
@@ -120,13 +117,28 @@ fn model_at(
     } else {
         LitSide::Back
     };
+    (mu0, signed_mu.abs(), side, to_light.length())
+}
+
+/// The CPU model at a point of a sheet lit by a point light (position, flux Φ in W), grey τ1 and Λ:
+/// (L_source, α), straight from `sheer_slab::model`.
+fn model_at(
+    point: DVec3,
+    normal: DVec3,
+    eye: DVec3,
+    (light, flux): (DVec3, f64),
+    tau: f64,
+    albedo: f64,
+    convention: IrradianceConvention,
+) -> (f64, f64) {
+    let (mu0, mu, side, distance) = shading_geometry(point, normal, eye, light);
     let shading = slab_shading(
         OpticalThickness::new(tau).unwrap(),
         Albedo::new(albedo).unwrap(),
         Cosine::new("mu0", mu0).unwrap(),
-        Cosine::new("mu", signed_mu.abs()).unwrap(),
+        Cosine::new("mu", mu).unwrap(),
         side,
-        point_light_beam_normal_irradiance(flux, to_light.length()).unwrap(),
+        point_light_beam_normal_irradiance(flux, distance).unwrap(),
         convention,
     )
     .unwrap();
@@ -152,27 +164,16 @@ fn model_at_with(
     albedo: f64,
     convention: IrradianceConvention,
 ) -> (f64, f64, f64) {
-    let to_light = light - point;
-    let mut n = normal.normalize();
-    if n.dot(to_light) < 0.0 {
-        n = -n;
-    }
-    let mu0 = n.dot(to_light.normalize());
-    let signed_mu = n.dot((eye - point).normalize());
-    let side = if signed_mu >= 0.0 {
-        LitSide::Front
-    } else {
-        LitSide::Back
-    };
+    let (mu0, mu, side, distance) = shading_geometry(point, normal, eye, light);
     let shade = |scattering: &Scattering| {
         slab_shading_with(
             scattering,
             OpticalThickness::new(tau).unwrap(),
             Albedo::new(albedo).unwrap(),
             Cosine::new("mu0", mu0).unwrap(),
-            Cosine::new("mu", signed_mu.abs()).unwrap(),
+            Cosine::new("mu", mu).unwrap(),
             side,
-            point_light_beam_normal_irradiance(flux, to_light.length()).unwrap(),
+            point_light_beam_normal_irradiance(flux, distance).unwrap(),
             convention,
         )
         .unwrap()
