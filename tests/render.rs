@@ -32,6 +32,27 @@ fn read_exr(path: &Path) -> image::Rgba32FImage {
     image::open(path).unwrap().to_rgba32f()
 }
 
+/// Writes `toml` to `dir/name.toml`, renders it with `sheer render` to `dir/name.exr` and reads that back.
+fn render_scene_to_exr(dir: &Path, name: &str, toml: &str) -> image::Rgba32FImage {
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(&scene, toml).unwrap();
+    let out = dir.join(format!("{name}.exr"));
+    sheer_ok(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    read_exr(&out)
+}
+
+/// A flat 1 m sheet of Λ = 0.8 facing the camera over a grey background, lit from 1 m straight in front.
+const STATIC_SHEET: &str = "[static_sheet]\nsize = [1.0, 1.0]\nalbedo = [0.8, 0.8, 0.8]\n\
+     [background]\ncolour = [0.3, 0.3, 0.3]\n\
+     [camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_degrees = 30.0\n\
+     [light]\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\nperiod = 0.0\nphase = 0.0\nflux = 50.0\nmarker = false\n";
+
 #[test]
 fn figure2_panels_differ_as_the_paper_says() {
     let dir = scratch("figure2");
@@ -160,25 +181,7 @@ fn a_default_scene_frame_shows_the_flag_where_it_should_be() {
 #[test]
 fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
     // A flat sheet facing the camera, light straight in front of it at 1 m: μ = μ0 ≈ 1 at the centre.
-    let dir = scratch("static");
-    let scene = dir.join("sheet.toml");
-    std::fs::write(
-        &scene,
-        "[static_sheet]\nsize = [1.0, 1.0]\nalbedo = [0.8, 0.8, 0.8]\n\
-         [background]\ncolour = [0.3, 0.3, 0.3]\n\
-         [camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_degrees = 30.0\n\
-         [light]\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\nperiod = 0.0\nphase = 0.0\nflux = 50.0\nmarker = false\n",
-    )
-    .unwrap();
-    let out = dir.join("sheet.exr");
-    sheer_ok(&[
-        "render",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let image = read_exr(&out);
+    let image = render_scene_to_exr(&scratch("static"), "sheet", STATIC_SHEET);
     let centre = image.get_pixel(256, 256).0;
     // By hand: E = Φ/(4πr²) normal to the beam; μ = μ0 = 1; τ1 = 2, Λ = 0.8;
     // L+ = Λ/(4π) E μ0/(μ+μ0) (1 − e^(−τ1(1/μ+1/μ0))) (eq. 4), α = e^(−τ1/μ), L = 0.3 α + L+ (eq. 9).
@@ -206,25 +209,14 @@ fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
 fn a_light_on_a_vertex_gives_no_nan_pixel() {
     // The light orbit puts the light at (0, 0, 1), exactly on the sheet's centre vertex: there r = 0 and
     // the lit side has no direction, so the vertex path must deliver no irradiance rather than 0/0.
-    let dir = scratch("light-on-vertex");
-    let scene = dir.join("sheet.toml");
-    std::fs::write(
-        &scene,
+    let image = render_scene_to_exr(
+        &scratch("light-on-vertex"),
+        "sheet",
         "[static_sheet]\nsize = [1.0, 1.0]\ncentre = [0.0, 0.0, 1.0]\nsegments = 2\n\
          [shading]\npath = \"vertex\"\n\
          [camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_degrees = 30.0\n\
          [light]\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\nperiod = 0.0\nphase = 0.0\nflux = 50.0\nmarker = false\n",
-    )
-    .unwrap();
-    let out = dir.join("sheet.exr");
-    sheer_ok(&[
-        "render",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let image = read_exr(&out);
+    );
     let bad = image
         .pixels()
         .filter(|p| p.0.iter().any(|v| !v.is_finite()))
@@ -271,26 +263,11 @@ fn the_all_orders_scene_key_renders_what_sheer_slab_computes() {
     // μ = μ0 ≈ 1, so the pixel is 0.3 α + E·L+ with L+ from `sheer slab --model all-orders` at
     // (τ1, Λ, μ0, μ) = (2, 0.8, 1, 1), and brighter than single scattering.
     let dir = scratch("all-orders");
-    let sheet = "[static_sheet]\nsize = [1.0, 1.0]\nalbedo = [0.8, 0.8, 0.8]\n\
-         [background]\ncolour = [0.3, 0.3, 0.3]\n\
-         [camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_degrees = 30.0\n\
-         [light]\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\nperiod = 0.0\nphase = 0.0\nflux = 50.0\nmarker = false\n";
     let render = |scattering: &str| {
-        let scene = dir.join(format!("{scattering}.toml"));
-        std::fs::write(
-            &scene,
-            format!("{sheet}[shading]\nscattering = \"{scattering}\"\n"),
-        )
-        .unwrap();
-        let out = dir.join(format!("{scattering}.exr"));
-        sheer_ok(&[
-            "render",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        read_exr(&out).get_pixel(256, 256).0
+        let toml = format!("{STATIC_SHEET}[shading]\nscattering = \"{scattering}\"\n");
+        render_scene_to_exr(&dir, scattering, &toml)
+            .get_pixel(256, 256)
+            .0
     };
     let (single, all) = (render("single"), render("all-orders"));
     let rows = dir.join("rows.csv");
@@ -331,7 +308,7 @@ fn the_all_orders_scene_key_renders_what_sheer_slab_computes() {
         ),
     ] {
         let scene = dir.join("bad.toml");
-        std::fs::write(&scene, format!("{sheet}[shading]\n{shading}")).unwrap();
+        std::fs::write(&scene, format!("{STATIC_SHEET}[shading]\n{shading}")).unwrap();
         let out = sheer(&[
             "render",
             "--scene",
