@@ -33,7 +33,7 @@ pub use cpu::{
 };
 pub use scene::{
     Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams, SlabMesh, Texture2d,
-    linear_to_srgb8,
+    linear_to_srgb8, srgb8_to_linear,
 };
 
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};

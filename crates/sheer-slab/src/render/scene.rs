@@ -514,6 +514,17 @@ impl LinearImage {
     }
 }
 
+/// The inverse sRGB transfer function (IEC 61966-2-1): an 8-bit sRGB value to linear [0, 1], e.g. for
+/// texture data read from PNG files.
+pub fn srgb8_to_linear(value: u8) -> f32 {
+    let c = f32::from(value) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// The sRGB transfer function (IEC 61966-2-1) of a display value, clamped to [0, 1] (NaN → 0), to 8 bits.
 pub fn linear_to_srgb8(value: f32) -> u8 {
     let v = if value.is_nan() {
@@ -541,6 +552,15 @@ mod tests {
         assert_eq!(linear_to_srgb8(f32::NAN), 0);
         // sRGB(0.5) = 0.7354 → 187.5 → 188.
         assert_eq!(linear_to_srgb8(0.5), 188);
+    }
+
+    #[test]
+    fn srgb_decoding_inverts_the_encoding_at_every_8_bit_value() {
+        assert_eq!(srgb8_to_linear(0), 0.0);
+        assert_eq!(srgb8_to_linear(255), 1.0);
+        for value in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(value)), value, "{value}");
+        }
     }
 
     #[test]
