@@ -122,7 +122,8 @@ impl Simulation {
             packed.resize(springs.len(), PackedConstraint::default());
             fill(packed, parallel, |c| {
                 let sp = &springs[c];
-                let (scale, scaled_compliance, gamma) = constants[family_index(sp.kind)];
+                let family = family_index(sp.kind);
+                let (scale, scaled_compliance, gamma) = constants[family];
                 let (wa, wb) = (inverse_masses[sp.a as usize], inverse_masses[sp.b as usize]);
                 let w = wa + wb;
                 let inverse_denominator = if scale == 0.0 || w == 0.0 {
@@ -137,7 +138,7 @@ impl Simulation {
                     b: sp.b,
                     rest_length: sp.rest_length,
                     inverse_denominator,
-                    family: family_index(sp.kind) as u8,
+                    family: family as u8,
                 }
             });
             self.denominator_key = Some(key);
