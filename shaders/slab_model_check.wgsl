@@ -28,8 +28,8 @@ fn cs_all_orders_check(@builtin(global_invocation_id) id: vec3<u32>) {
     // τ1 = x, Λ = y, μ0 = z, μ = w: (L_m reflected, L_m transmitted, ln f reflected, ln f transmitted),
     // L_m = Λ² μ0 e^{ln f} per unit irradiance normal to the beam.
     let tau = all_orders_tau(sample.x);
-    let reflected = all_orders_log_value(tau, sample.y, all_orders_cosines(sample.z, sample.w, true));
-    let transmitted = all_orders_log_value(tau, sample.y, all_orders_cosines(sample.z, sample.w, false));
+    let reflected = all_orders_log_value(tau, sample.y, all_orders_cosines(sample.z, sample.w), true);
+    let transmitted = all_orders_log_value(tau, sample.y, all_orders_cosines(sample.z, sample.w), false);
     let scale = sample.y * sample.y * sample.z;
     model_outputs[index] = vec4<f32>(scale * exp(reflected), scale * exp(transmitted), reflected,
         transmitted);

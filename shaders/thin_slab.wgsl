@@ -144,20 +144,19 @@ fn all_orders_tau(tau: f32) -> AllOrdersTau {
 }
 
 struct AllOrdersCosines {
-    // Texel offset of the (μ0, μ) cell: (j, face rows + k).
+    // Texel offset of the (μ0, μ) cell within a face's τ1 node: (j, k).
     texel: vec2<i32>,
     // Bilinear weights of the cell's four nodes, in the texel's channel order.
     weights: vec4<f32>,
 }
 
-fn all_orders_cosines(mu0: f32, mu: f32, eye_on_lit_side: bool) -> AllOrdersCosines {
+fn all_orders_cosines(mu0: f32, mu: f32) -> AllOrdersCosines {
     let cells = all_orders_axes.cosine.x;
     // min(): normalised dot products may exceed 1 by rounding.
     let k = all_orders_axis(sqrt(min(mu0, 1.0)), cells);
     let j = all_orders_axis(sqrt(min(mu, 1.0)), cells);
-    let face_rows = select(all_orders_axes.cosine.y, 0.0, eye_on_lit_side);
     let weights = vec4<f32>(1.0 - k.y, 1.0 - k.y, k.y, k.y) * vec4<f32>(1.0 - j.y, j.y, 1.0 - j.y, j.y);
-    return AllOrdersCosines(vec2<i32>(i32(j.x), i32(face_rows + k.x)), weights);
+    return AllOrdersCosines(vec2<i32>(i32(j.x), i32(k.x)), weights);
 }
 
 // Albedo node and weight at τ1 node with warp (e^β − 1, 1/β), s = √(1−Λ): w = ln(1 + s(e^β − 1))/β.
@@ -166,41 +165,100 @@ fn all_orders_albedo_axis(s: f32, warp: vec2<f32>) -> vec2<f32> {
         all_orders_axes.tau.w);
 }
 
-// ln f interpolated quadrilinearly (four texel loads, each a whole (μ0, μ) cell).
-fn all_orders_log_value(tau: AllOrdersTau, albedo: f32, cosines: AllOrdersCosines) -> f32 {
+// Where Λ falls on the albedo axes of the lower and the upper τ1 node: (node, weight) for each.
+struct AllOrdersAlbedo {
+    lower: vec2<f32>,
+    upper: vec2<f32>,
+}
+
+fn all_orders_albedo(tau: AllOrdersTau, albedo: f32) -> AllOrdersAlbedo {
     // max(): Λ from half-float texels times the scale may exceed 1 by rounding.
     let s = sqrt(max(1.0 - albedo, 0.0));
-    let lower = all_orders_albedo_axis(s, tau.warps.xy);
-    let upper = all_orders_albedo_axis(s, tau.warps.zw);
+    return AllOrdersAlbedo(all_orders_albedo_axis(s, tau.warps.xy), all_orders_albedo_axis(s, tau.warps.zw));
+}
+
+// ln f interpolated quadrilinearly (four texel loads, each a whole (μ0, μ) cell) on the face whose rows
+// start at `face_rows` (0: eye on the lit side; the axes' rows per face: the far side).
+fn all_orders_log_value_at(tau: AllOrdersTau, albedo: AllOrdersAlbedo, cosines: AllOrdersCosines,
+        face_rows: i32) -> f32 {
     let cells = i32(all_orders_axes.cosine.x);
-    let row_lower = cosines.texel.y + i32(tau.node.x) * cells;
-    let column_lower = cosines.texel.x + i32(lower.x) * cells;
-    let column_upper = cosines.texel.x + i32(upper.x) * cells;
+    let row_lower = cosines.texel.y + face_rows + i32(tau.node.x) * cells;
+    let column_lower = cosines.texel.x + i32(albedo.lower.x) * cells;
+    let column_upper = cosines.texel.x + i32(albedo.upper.x) * cells;
     let w = cosines.weights;
     let at_lower = mix(dot(textureLoad(all_orders_table, vec2<i32>(column_lower, row_lower), 0), w),
-        dot(textureLoad(all_orders_table, vec2<i32>(column_lower + cells, row_lower), 0), w), lower.y);
+        dot(textureLoad(all_orders_table, vec2<i32>(column_lower + cells, row_lower), 0), w),
+        albedo.lower.y);
     let at_upper = mix(dot(textureLoad(all_orders_table, vec2<i32>(column_upper, row_lower + cells), 0), w),
         dot(textureLoad(all_orders_table, vec2<i32>(column_upper + cells, row_lower + cells), 0), w),
-        upper.y);
+        albedo.upper.y);
     return mix(at_lower, at_upper, tau.node.y);
+}
+
+fn all_orders_face_rows(eye_on_lit_side: bool) -> i32 {
+    return i32(select(all_orders_axes.cosine.y, 0.0, eye_on_lit_side));
+}
+
+// ln f on one face (the lookup `evaluate_shader_all_orders` checks against the CPU sampler).
+fn all_orders_log_value(tau: AllOrdersTau, albedo: f32, cosines: AllOrdersCosines, eye_on_lit_side: bool)
+        -> f32 {
+    return all_orders_log_value_at(tau, all_orders_albedo(tau, albedo), cosines,
+        all_orders_face_rows(eye_on_lit_side));
+}
+
+// τ1 node per channel: one lookup of the τ1 axis when τ1 is grey.
+struct AllOrdersChannels {
+    red: AllOrdersTau,
+    green: AllOrdersTau,
+    blue: AllOrdersTau,
+}
+
+fn all_orders_channels(tau: vec3<f32>) -> AllOrdersChannels {
+    if per_channel_thickness {
+        return AllOrdersChannels(all_orders_tau(tau.r), all_orders_tau(tau.g), all_orders_tau(tau.b));
+    }
+    let grey = all_orders_tau(tau.r);
+    return AllOrdersChannels(grey, grey, grey);
 }
 
 // The multiply-scattered radiance per unit albedo and unit irradiance normal to the beam,
 // L_m/Λ = Λ·μ0·e^{ln f} (sr⁻¹), per channel; τ1 grey unless `per_channel_thickness`.
 fn all_orders_multiple_per_albedo(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu: f32,
         eye_on_lit_side: bool) -> vec3<f32> {
-    let cosines = all_orders_cosines(mu0, mu, eye_on_lit_side);
-    var log_value: vec3<f32>;
-    if per_channel_thickness {
-        log_value = vec3<f32>(all_orders_log_value(all_orders_tau(tau.r), albedo.r, cosines),
-            all_orders_log_value(all_orders_tau(tau.g), albedo.g, cosines),
-            all_orders_log_value(all_orders_tau(tau.b), albedo.b, cosines));
-    } else {
-        let grey = all_orders_tau(tau.r);
-        log_value = vec3<f32>(all_orders_log_value(grey, albedo.r, cosines),
-            all_orders_log_value(grey, albedo.g, cosines), all_orders_log_value(grey, albedo.b, cosines));
-    }
+    let cosines = all_orders_cosines(mu0, mu);
+    let nodes = all_orders_channels(tau);
+    let face_rows = all_orders_face_rows(eye_on_lit_side);
+    let log_value = vec3<f32>(
+        all_orders_log_value_at(nodes.red, all_orders_albedo(nodes.red, albedo.r), cosines, face_rows),
+        all_orders_log_value_at(nodes.green, all_orders_albedo(nodes.green, albedo.g), cosines, face_rows),
+        all_orders_log_value_at(nodes.blue, all_orders_albedo(nodes.blue, albedo.b), cosines, face_rows));
     return albedo * (mu0 * exp(log_value));
+}
+
+// f = L_m/(Λ²·μ0) per unit irradiance normal to the beam (sr⁻¹), the table's interpolated e^{ln f}, per
+// channel on both faces at once: the axes are shared, only the loads double.
+struct AllOrdersBothFaces {
+    // Eye on the lit side (reflected).
+    lit: vec3<f32>,
+    // Eye on the far side (transmitted).
+    far: vec3<f32>,
+}
+
+fn all_orders_reduced_both_faces(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu: f32)
+        -> AllOrdersBothFaces {
+    let cosines = all_orders_cosines(mu0, mu);
+    let nodes = all_orders_channels(tau);
+    let far_rows = all_orders_face_rows(false);
+    let red = all_orders_albedo(nodes.red, albedo.r);
+    let green = all_orders_albedo(nodes.green, albedo.g);
+    let blue = all_orders_albedo(nodes.blue, albedo.b);
+    let lit = vec3<f32>(all_orders_log_value_at(nodes.red, red, cosines, 0),
+        all_orders_log_value_at(nodes.green, green, cosines, 0),
+        all_orders_log_value_at(nodes.blue, blue, cosines, 0));
+    let far = vec3<f32>(all_orders_log_value_at(nodes.red, red, cosines, far_rows),
+        all_orders_log_value_at(nodes.green, green, cosines, far_rows),
+        all_orders_log_value_at(nodes.blue, blue, cosines, far_rows));
+    return AllOrdersBothFaces(exp(lit), exp(far));
 }
 
 struct SlabValues {
@@ -211,9 +269,17 @@ struct SlabValues {
     transmittance: vec3<f32>,
 }
 
-// The model at one point: lit-side rule, point-light irradiance, eqs. (4)/(5) per channel and α; with
-// `all_orders` plus the table's multiple part, for which `albedo` (Λ per channel) is needed.
-fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>) -> SlabValues {
+// Where one point of the slab sees the light and the eye: the lit-side rule, its cosines with the grazing
+// floor, and the irradiance that eqs. (4)–(5) multiply.
+struct SlabPoint {
+    mu0: f32,
+    mu: f32,
+    eye_on_lit_side: bool,
+    // Irradiance normal to the beam Φ/(4πr²), or eq. (6)'s surface irradiance Φμ0/(4πr²) (W/m²).
+    irradiance: f32,
+}
+
+fn slab_point(position: vec3<f32>, normal: vec3<f32>) -> SlabPoint {
     let to_light = frame.light.xyz - position;
     let side = lit_side_cosines(normal, to_light, frame.eye.xyz - position);
     let mu = max(side.mu, COSINE_FLOOR);
@@ -227,28 +293,41 @@ fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: v
     let convention_factor = select(1.0, mu0, frame.albedo_scale.w > 0.5);
     let irradiance = received * convention_factor * frame.light.w
         / (4.0 * PI * select(1.0, distance_squared, distance_squared > 0.0));
+    return SlabPoint(mu0, mu, side.eye_on_lit_side, irradiance);
+}
+
+// Single scattering at one point: eqs. (4)/(5) per channel per unit albedo, and α.
+fn single_values(point: SlabPoint, tau: vec3<f32>) -> SlabValues {
     var reflected: vec3<f32>;
     var transmitted: vec3<f32>;
     var transmittance: vec3<f32>;
     if per_channel_thickness {
-        let red = slab_shapes(tau.r, mu0, mu);
-        let green = slab_shapes(tau.g, mu0, mu);
-        let blue = slab_shapes(tau.b, mu0, mu);
+        let red = slab_shapes(tau.r, point.mu0, point.mu);
+        let green = slab_shapes(tau.g, point.mu0, point.mu);
+        let blue = slab_shapes(tau.b, point.mu0, point.mu);
         reflected = vec3<f32>(red.x, green.x, blue.x);
         transmitted = vec3<f32>(red.y, green.y, blue.y);
         transmittance = vec3<f32>(red.z, green.z, blue.z);
     } else {
-        let grey = slab_shapes(tau.r, mu0, mu);
+        let grey = slab_shapes(tau.r, point.mu0, point.mu);
         reflected = vec3<f32>(grey.x);
         transmitted = vec3<f32>(grey.y);
         transmittance = vec3<f32>(grey.z);
     }
-    let shape = select(transmitted, reflected, side.eye_on_lit_side);
-    var radiance = shape * (irradiance / (4.0 * PI));
+    let shape = select(transmitted, reflected, point.eye_on_lit_side);
+    return SlabValues(shape * (point.irradiance / (4.0 * PI)), transmittance);
+}
+
+// The model at one point: lit-side rule, point-light irradiance, eqs. (4)/(5) per channel and α; with
+// `all_orders` plus the table's multiple part, for which `albedo` (Λ per channel) is needed.
+fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>) -> SlabValues {
+    let point = slab_point(position, normal);
+    var values = single_values(point, tau);
     if all_orders {
-        radiance += all_orders_multiple_per_albedo(tau, albedo, mu0, mu, side.eye_on_lit_side) * irradiance;
+        values.radiance_per_albedo += all_orders_multiple_per_albedo(tau, albedo, point.mu0, point.mu,
+            point.eye_on_lit_side) * point.irradiance;
     }
-    return SlabValues(radiance, transmittance);
+    return values;
 }
 
 // τ1 per channel at uv; the thickness texture is only sampled when present (fixed per pipeline).
@@ -305,6 +384,50 @@ fn fs_per_fragment(input: FragmentPathVarying) -> SlabOutput {
     let tau = optical_thickness_at(input.uv);
     let albedo = albedo_at(input.uv);
     let values = slab_values(input.world_position, input.normal, tau, albedo);
+    return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
+}
+
+// ---- per fragment, the multiple part per vertex -------------------------------------------------------
+// The all-orders model with eqs. (4)–(5), α and the irradiance per fragment, as `fs_per_fragment`, but the
+// table's multiple part per unit albedo and unit irradiance, for both faces, computed once per vertex by
+// `cs_multiple_at_vertex` (multiple_at_vertex.wgsl) and interpolated: the fragment picks the face its own
+// lit-side rule gives and multiplies by its own irradiance and Λ. Multiple scattering varies slowly with
+// μ0 and μ, so this costs little accuracy (measured in tests/gpu_vs_cpu.rs) and keeps the table's loads
+// out of the fragment shader.
+
+struct MultipleAtVertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    // L_m/(Λ·E) (sr⁻¹) with the eye on the lit side (reflected) and on the far side (transmitted).
+    @location(3) multiple_lit: vec3<f32>,
+    @location(4) multiple_far: vec3<f32>,
+}
+
+struct MultipleAtVertexVarying {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) multiple_lit: vec3<f32>,
+    @location(4) multiple_far: vec3<f32>,
+}
+
+@vertex
+fn vs_multiple_at_vertex(input: MultipleAtVertexInput) -> MultipleAtVertexVarying {
+    return MultipleAtVertexVarying(frame.view_projection * vec4<f32>(input.position, 1.0),
+        input.position, input.normal, input.uv, input.multiple_lit, input.multiple_far);
+}
+
+@fragment
+fn fs_multiple_at_vertex(input: MultipleAtVertexVarying) -> SlabOutput {
+    let tau = optical_thickness_at(input.uv);
+    let albedo = albedo_at(input.uv);
+    let point = slab_point(input.world_position, input.normal);
+    var values = single_values(point, tau);
+    // L_m/Λ = Λ·μ0·f with the fragment's own Λ and μ0: only f, which varies more slowly, is interpolated.
+    let reduced = select(input.multiple_far, input.multiple_lit, point.eye_on_lit_side);
+    values.radiance_per_albedo += albedo * (point.mu0 * point.irradiance) * reduced;
     return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
 }
 

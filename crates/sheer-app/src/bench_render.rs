@@ -12,7 +12,7 @@ use clap::Args;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{EvaluationPathName, Scattering, ShadingModel};
+use crate::scene::{AllOrdersLookup, EvaluationPathName, Scattering, ShadingModel};
 
 #[derive(Debug, Args)]
 pub struct BenchRenderArgs {
@@ -52,30 +52,43 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
     let dt = 1.0 / flag.scene.render.fps;
+    use AllOrdersLookup::{Fragment as TablePerFragment, Vertex as TablePerVertex};
     use EvaluationPathName::{Cpu, Fragment, Vertex};
     use Scattering::{AllOrders, Single};
+    use ShadingModel::{Baseline, ThinSlab};
+    // (name, model, path, scattering, where the fragment path looks the all-orders table up).
     let cases = [
-        ("fragment", ShadingModel::ThinSlab, Fragment, Single),
+        ("fragment", ThinSlab, Fragment, Single, TablePerFragment),
         (
             "fragment/all-orders",
-            ShadingModel::ThinSlab,
+            ThinSlab,
             Fragment,
             AllOrders,
+            TablePerFragment,
         ),
-        ("vertex", ShadingModel::ThinSlab, Vertex, Single),
+        // The per-fragment path with the table looked up once per vertex (`all_orders_lookup`).
+        (
+            "fragment/all-orders/table@vertex",
+            ThinSlab,
+            Fragment,
+            AllOrders,
+            TablePerVertex,
+        ),
+        ("vertex", ThinSlab, Vertex, Single, TablePerFragment),
         (
             "vertex/all-orders",
-            ShadingModel::ThinSlab,
+            ThinSlab,
             Vertex,
             AllOrders,
+            TablePerFragment,
         ),
-        ("cpu", ShadingModel::ThinSlab, Cpu, Single),
-        ("cpu/all-orders", ShadingModel::ThinSlab, Cpu, AllOrders),
-        ("baseline", ShadingModel::Baseline, Fragment, Single),
+        ("cpu", ThinSlab, Cpu, Single, TablePerFragment),
+        ("cpu/all-orders", ThinSlab, Cpu, AllOrders, TablePerFragment),
+        ("baseline", Baseline, Fragment, Single, TablePerFragment),
     ];
     let mut rows: Vec<Row> = cases
         .iter()
-        .map(|&(name, _, path, scattering)| Row {
+        .map(|&(name, _, path, scattering, _)| Row {
             name,
             path,
             scattering,
@@ -87,11 +100,13 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         .collect();
     let select =
         |renderer: &mut FrameRenderer, flag: &mut FlagScene, case: usize| -> Result<(), CliError> {
-            let (_, model, path, scattering) = cases[case];
+            let (_, model, path, scattering, lookup) = cases[case];
             flag.scene.shading.model = model;
             flag.scene.shading.path = path;
-            if flag.scene.shading.scattering != scattering {
-                flag.scene.shading.scattering = scattering;
+            let shading = &mut flag.scene.shading;
+            if shading.scattering != scattering || shading.all_orders_lookup != lookup {
+                shading.scattering = scattering;
+                shading.all_orders_lookup = lookup;
                 renderer.update_shading(&flag.scene)?;
             }
             Ok(())
@@ -130,7 +145,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     let (w, h) = (flag.scene.render.width, flag.scene.render.height);
     let per_frame = |d: Duration, n: u32| d.as_secs_f64() * 1e3 / f64::from(n);
     let baseline_fps = {
-        let b = rows.last().expect("seven rows");
+        let b = rows.last().expect("eight rows");
         f64::from(b.frames) / b.total.as_secs_f64()
     };
     // Median over rounds of this row's frame time over single scattering's on the same path.
@@ -158,7 +173,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     } else {
         println!("adapter: {}", renderer.adapter());
         println!(
-            "{:<19} {:>9} {:>8} {:>9} {:>7} {:>14} {:>11} {:>13} {:>12}",
+            "{:<30} {:>9} {:>8} {:>9} {:>7} {:>14} {:>11} {:>13} {:>12}",
             "path",
             "size",
             "fps",
@@ -192,7 +207,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             );
         } else {
             println!(
-                "{:<19} {:>9} {:>8.1} {:>9.2} {:>7} {:>14.2} {:>11.2} {:>13.2} {:>12.2}",
+                "{:<30} {:>9} {:>8.1} {:>9.2} {:>7} {:>14.2} {:>11.2} {:>13.2} {:>12.2}",
                 row.name,
                 format!("{w}x{h}"),
                 fps,

@@ -18,7 +18,7 @@ use sheer_slab::render::{
 use sheer_slab::{AllOrdersTable, IrradianceConvention};
 
 use crate::CliError;
-use crate::scene::{self, Convention, EvaluationPathName, Scene, ShadingModel};
+use crate::scene::{self, AllOrdersLookup, Convention, EvaluationPathName, Scene, ShadingModel};
 use crate::simulate::{flag_simulation, grid_uvs};
 
 /// Time spent in each stage of the last frame.
@@ -218,6 +218,14 @@ pub fn builtin_all_orders_table() -> Result<Arc<AllOrdersTable>, CliError> {
         .map_err(|e| CliError::new(format!("the built-in all-orders table: {e}")))
 }
 
+/// Where the renderer's per-fragment path looks the all-orders table up (`shading.all_orders_lookup`).
+fn all_orders_sampling(scene: &Scene) -> sheer_slab::render::AllOrdersSampling {
+    match scene.shading.all_orders_lookup {
+        AllOrdersLookup::Vertex => sheer_slab::render::AllOrdersSampling::PerVertex,
+        AllOrdersLookup::Fragment => sheer_slab::render::AllOrdersSampling::PerFragment,
+    }
+}
+
 /// The renderer's scattering model for the scene's `shading.scattering`.
 fn scattering(scene: &Scene) -> Result<sheer_slab::Scattering, CliError> {
     Ok(match scene.shading.scattering {
@@ -308,6 +316,7 @@ impl FrameRenderer {
             exposure: scene.shading.exposure,
             baseline_transmittance: scene.shading.baseline_alpha,
             scattering: scattering(scene)?,
+            all_orders_sampling: all_orders_sampling(scene),
         };
         validate_shading(&shading, scene)?;
         Ok(FrameRenderer {
@@ -336,6 +345,7 @@ impl FrameRenderer {
             Convention::PaperLiteral => IrradianceConvention::PaperLiteral,
         };
         shading.scattering = scattering(scene)?;
+        shading.all_orders_sampling = all_orders_sampling(scene);
         validate_shading(&shading, scene)?;
         self.shading = shading;
         Ok(())

@@ -12,7 +12,9 @@ use sheer_cloth::Method;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{EvaluationPathName, Scattering, Scene, ShadingModel, ShadingSection};
+use crate::scene::{
+    AllOrdersLookup, EvaluationPathName, Scattering, Scene, ShadingModel, ShadingSection,
+};
 
 /// Options of the window from the command line.
 #[derive(Debug, Clone, Default)]
@@ -354,6 +356,27 @@ impl SheerApp {
                     ui.selectable_value(&mut s.scattering, Scattering::AllOrders, "all orders");
                     shading_changed |= s.scattering != before;
                 });
+                if s.scattering == Scattering::AllOrders && s.path == EvaluationPathName::Fragment {
+                    ui.horizontal(|ui| {
+                        ui.label("table lookup");
+                        let before = s.all_orders_lookup;
+                        ui.selectable_value(
+                            &mut s.all_orders_lookup,
+                            AllOrdersLookup::Vertex,
+                            "per vertex",
+                        )
+                        .on_hover_text(
+                            "once per vertex, interpolated: about the cost of single scattering",
+                        );
+                        ui.selectable_value(
+                            &mut s.all_orders_lookup,
+                            AllOrdersLookup::Fragment,
+                            "per fragment",
+                        )
+                        .on_hover_text("exact to the table in every pixel, slower");
+                        shading_changed |= s.all_orders_lookup != before;
+                    });
+                }
                 if let Some(v) = self.fields.optical_thickness.show(ui, in_range(1e-3, 50.0)) {
                     s.optical_thickness = [v as f32; 3];
                     shading_changed = true;

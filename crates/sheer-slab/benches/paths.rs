@@ -14,7 +14,8 @@ use criterion::Criterion;
 use glam::Vec3;
 use sheer_slab::all_orders::{Scattering, default_table_path, load_all_orders_table};
 use sheer_slab::render::{
-    Background, Camera, EvaluationPath, HeadlessRenderer, ShadingParams, SlabMesh, Texture2d,
+    AllOrdersSampling, Background, Camera, EvaluationPath, HeadlessRenderer, ShadingParams,
+    SlabMesh, Texture2d,
 };
 
 const SIZE: u32 = 512;
@@ -125,21 +126,37 @@ fn main() {
     let table = load_all_orders_table(default_table_path()).expect("the shipped all-orders table");
     let mut cases = Vec::new();
     for path in EvaluationPath::ALL {
-        let models: &[Scattering] = if path == EvaluationPath::Baseline {
-            &[Scattering::Single]
-        } else {
-            &[Scattering::Single, Scattering::AllOrders(table.clone())]
-        };
-        for scattering in models {
+        let mut models = vec![(Scattering::Single, AllOrdersSampling::default())];
+        if path != EvaluationPath::Baseline {
+            models.push((
+                Scattering::AllOrders(table.clone()),
+                AllOrdersSampling::PerVertex,
+            ));
+        }
+        if path == EvaluationPath::PerFragment {
+            // The table looked up in every fragment instead of once per vertex.
+            models.push((
+                Scattering::AllOrders(table.clone()),
+                AllOrdersSampling::PerFragment,
+            ));
+        }
+        for (scattering, sampling) in models {
+            let name = match (path, &scattering, sampling) {
+                (EvaluationPath::Baseline, _, _) => path.name().to_string(),
+                (EvaluationPath::PerFragment, Scattering::AllOrders(_), _) => format!(
+                    "{}/{} (table {})",
+                    path.name(),
+                    scattering.name(),
+                    sampling.name()
+                ),
+                _ => format!("{}/{}", path.name(), scattering.name()),
+            };
             cases.push(Case {
-                name: if path == EvaluationPath::Baseline {
-                    path.name().to_string()
-                } else {
-                    format!("{}/{}", path.name(), scattering.name())
-                },
+                name,
                 path,
                 shading: ShadingParams {
-                    scattering: scattering.clone(),
+                    scattering,
+                    all_orders_sampling: sampling,
                     ..scene.shading.clone()
                 },
             });

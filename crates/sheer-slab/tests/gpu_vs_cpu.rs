@@ -16,8 +16,9 @@ use sheer_slab::model::{
     point_light_beam_normal_irradiance, slab_shading,
 };
 use sheer_slab::render::{
-    Background, Camera, EvaluationPath, HeadlessRenderer, LinearImage, RenderError, ShadingParams,
-    SlabMesh, TargetFormat, Texture2d, gpu_tests_may_be_skipped, slab_values_at,
+    AllOrdersSampling, Background, Camera, EvaluationPath, HeadlessRenderer, LinearImage,
+    RenderError, ShadingParams, SlabMesh, TargetFormat, Texture2d, gpu_tests_may_be_skipped,
+    lit_side_cosines, slab_values_at,
 };
 
 const WIDTH: u32 = 96;
@@ -851,6 +852,7 @@ fn all_orders_per_fragment_matches_cpu_model_pixel_by_pixel() {
                         .unwrap();
                 shading.convention = convention;
                 shading.scattering = scattering.clone();
+                shading.all_orders_sampling = AllOrdersSampling::PerFragment;
                 let image = renderer
                     .render(
                         &mesh,
@@ -965,6 +967,7 @@ fn all_orders_per_vertex_and_cpu_paths_agree_with_per_fragment_on_a_fine_sheet()
         shading.thickness_texture = Some(thickness.clone());
         shading.albedo_texture = albedo_texture.clone();
         shading.scattering = all_orders();
+        shading.all_orders_sampling = AllOrdersSampling::PerFragment;
         let render = |renderer: &mut HeadlessRenderer, path| {
             renderer
                 .render(&mesh, &camera, &shading, &background, path)
@@ -973,6 +976,28 @@ fn all_orders_per_vertex_and_cpu_paths_agree_with_per_fragment_on_a_fine_sheet()
         let fragment = render(&mut renderer, EvaluationPath::PerFragment);
         let vertex = render(&mut renderer, EvaluationPath::PerVertex);
         let cpu = render(&mut renderer, EvaluationPath::Cpu);
+        let table_per_vertex = ShadingParams {
+            all_orders_sampling: AllOrdersSampling::PerVertex,
+            ..shading.clone()
+        };
+        let hybrid = renderer
+            .render(
+                &mesh,
+                &camera,
+                &table_per_vertex,
+                &background,
+                EvaluationPath::PerFragment,
+            )
+            .unwrap();
+        let (worst_hybrid, hybrid_bound) = assert_table_per_vertex_interpolates(
+            &fragment,
+            &hybrid,
+            &Sheet { normal, ..sheet },
+            segments,
+            &shading,
+            camera.eye.as_dvec3(),
+            epsilon,
+        );
 
         // What the per-vertex paths interpolate: G = L/Λ (with the vertex's Λ) and α, from the CPU
         // model at (s, t); the fragment multiplies G by its own Λ ≤ Λ_max.
@@ -1064,9 +1089,90 @@ fn all_orders_per_vertex_and_cpu_paths_agree_with_per_fragment_on_a_fine_sheet()
         println!(
             "all-orders {name}: per-vertex vs per-fragment worst {worst_vertex:e} (bound \
              {interpolation_tolerance:e}); CPU vs per-vertex worst relative {worst_cpu:e} (bound \
-             {relative_cpu:e})"
+             {relative_cpu:e}); per fragment with the table per vertex vs per fragment worst \
+             {worst_hybrid:e} (bound {hybrid_bound:e})"
         );
     }
+}
+
+/// The per-fragment path with the table looked up per vertex (`AllOrdersSampling::PerVertex`, image
+/// `per_vertex`) against the same path with the table per fragment (`exact`), on a sheet of
+/// `segments` × `segments` quads. They differ only in the table's reduced value f = L_m/(Λ²·μ0·E),
+/// which the first interpolates linearly over each triangle and then multiplies by the fragment's
+/// Λ²·μ0·E: so per pixel by at most max(Λ²·μ0·E) times the interpolation error of f, bounded as in the
+/// per-vertex test by (h²/8)|f''| per direction from second differences at the vertex spacing, ×2, plus
+/// both lookups' f32 tolerance. Returns (worst difference, bound).
+fn assert_table_per_vertex_interpolates(
+    exact: &LinearImage,
+    per_vertex: &LinearImage,
+    sheet: &Sheet,
+    segments: u32,
+    shading: &ShadingParams,
+    eye: DVec3,
+    epsilon: f64,
+) -> (f64, f64) {
+    let single = ShadingParams {
+        scattering: Scattering::Single,
+        ..shading.clone()
+    };
+    let light = shading.light_position.as_dvec3();
+    // (f per channel, Λ²·μ0·E per channel) at sheet coordinates (s, t); slab_values_at gives L/Λ.
+    let multiple = |s: f64, t: f64| {
+        let point = sheet.origin + s * sheet.u + t * sheet.v;
+        let uv = [s as f32, t as f32];
+        let tau = sheer_slab::render::optical_thickness_at(shading, uv);
+        let albedo = sheer_slab::render::albedo_at(shading, uv);
+        let all = slab_values_at(point, sheet.normal, tau, albedo, eye, shading)
+            .unwrap()
+            .0;
+        let one = slab_values_at(point, sheet.normal, tau, albedo, eye, &single)
+            .unwrap()
+            .0;
+        let (mu0, _, _) = lit_side_cosines(sheet.normal, light - point, eye - point);
+        let irradiance = f64::from(shading.light_flux)
+            / (4.0 * std::f64::consts::PI * light.distance_squared(point));
+        (
+            std::array::from_fn::<f64, 3, _>(|c| {
+                (all[c] - one[c]) / (albedo[c] * mu0 * irradiance)
+            }),
+            std::array::from_fn::<f64, 3, _>(|c| albedo[c] * albedo[c] * mu0 * irradiance),
+        )
+    };
+    let h = 1.0 / f64::from(segments);
+    let (mut curvature, mut largest_weight) = (0.0f64, 0.0f64);
+    for i in 1..segments {
+        for j in 1..segments {
+            let (s, t) = (f64::from(i) * h, f64::from(j) * h);
+            let (centre, weight) = multiple(s, t);
+            for (ds, dt) in [(h, 0.0), (0.0, h), (h, h)] {
+                let (plus, minus) = (multiple(s + ds, t + dt).0, multiple(s - ds, t - dt).0);
+                for c in 0..3 {
+                    curvature = curvature.max((plus[c] - 2.0 * centre[c] + minus[c]).abs() * 3.0);
+                }
+            }
+            largest_weight = largest_weight.max(weight.into_iter().fold(0.0, f64::max));
+        }
+    }
+    let bound = largest_weight * 2.0 * curvature / 8.0;
+    let relative = 2.0 * LOOKUP_RELATIVE_TOLERANCE + 64.0 * epsilon;
+    let mut worst = 0.0f64;
+    for (index, (e, v)) in exact.pixels.iter().zip(&per_vertex.pixels).enumerate() {
+        assert_eq!(e[3], v[3], "pixel {index}: α is per fragment on both");
+        for channel in 0..3 {
+            let (e, v) = (f64::from(e[channel]), f64::from(v[channel]));
+            worst = worst.max((v - e).abs());
+            assert!(
+                (v - e).abs() <= bound + relative * e.abs() + 1e-7,
+                "pixel {index}: table per vertex {v} vs per fragment {e} (bound {bound:e})"
+            );
+        }
+    }
+    // The two differ at all (the compute pass ran and the interpolation is visible), but only a little.
+    assert!(
+        worst > 0.0,
+        "the table-per-vertex render equals the per-fragment one exactly"
+    );
+    (worst, bound)
 }
 
 #[test]
@@ -1178,6 +1284,7 @@ fn all_orders_per_channel_optical_thickness() {
     shading.optical_thickness = taus;
     shading.albedo_scale = albedos;
     shading.scattering = scattering.clone();
+    shading.all_orders_sampling = AllOrdersSampling::PerFragment;
     let camera = camera(Vec3::new(0.2, 0.3, 1.9));
     let background = [0.4f32, 0.5, 0.6];
     let image = renderer
@@ -1223,8 +1330,33 @@ fn all_orders_per_channel_optical_thickness() {
         |x, y| u32::from(hit(x, y).is_some()),
     );
     assert!(comparison.covered > 300);
+    // The same with the table per vertex (the compute pass's per-channel variant), on a mesh fine
+    // enough for the interpolation to be accurate.
+    let segments = 24;
+    let fine = sheet.mesh(segments);
+    let table_per_vertex = ShadingParams {
+        all_orders_sampling: AllOrdersSampling::PerVertex,
+        ..shading.clone()
+    };
+    let render = |renderer: &mut HeadlessRenderer, shading: &ShadingParams| {
+        renderer
+            .render(
+                &fine,
+                &camera,
+                shading,
+                &Background::Uniform(background),
+                EvaluationPath::PerFragment,
+            )
+            .unwrap()
+    };
+    let exact = render(&mut renderer, &shading);
+    let hybrid = render(&mut renderer, &table_per_vertex);
+    let (worst, bound) = assert_table_per_vertex_interpolates(
+        &exact, &hybrid, &sheet, segments, &shading, eye, epsilon,
+    );
     println!(
-        "all-orders per-channel tau1: worst relative error {:e}",
+        "all-orders per-channel tau1: worst relative error {:e}; table per vertex vs per fragment \
+         worst {worst:e} (bound {bound:e})",
         comparison.worst_relative
     );
 }

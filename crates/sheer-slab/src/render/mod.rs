@@ -14,6 +14,10 @@
 //! paths agree to `f32` rounding; rgba32float is not filterable on every adapter, and hardware filtering
 //! would quantise weights (8 bits on lavapipe).
 //!
+//! With [`AllOrdersSampling::PerVertex`] the per-fragment path instead runs a compute pass
+//! (`shaders/multiple_at_vertex.wgsl`) that looks the table up once per mesh vertex for both faces and
+//! feeds the result to the draw as vertex attributes (`vs_multiple_at_vertex`/`fs_multiple_at_vertex`).
+//!
 //! Adapter choice: `WGPU_BACKEND` if set, else Vulkan (Mesa lavapipe on a machine without a GPU) and then
 //! GL (llvmpipe over EGL); the first adapter of the preferred backend wins, hardware before software.
 
@@ -32,8 +36,8 @@ pub use cpu::{
     sample_bilinear_red, slab_values_at, sort_back_to_front,
 };
 pub use scene::{
-    Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams, SlabMesh, Texture2d,
-    linear_to_srgb8, srgb8_to_linear,
+    AllOrdersSampling, Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams,
+    SlabMesh, Texture2d, linear_to_srgb8, srgb8_to_linear,
 };
 
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};
@@ -44,6 +48,7 @@ const LIT_SIDE: &str = include_str!("../../../../shaders/lit_side.wgsl");
 const OUTPUT_SINGLE: &str = include_str!("../../../../shaders/slab_output_single.wgsl");
 const OUTPUT_DUAL: &str = include_str!("../../../../shaders/slab_output_dual.wgsl");
 const MODEL_CHECK: &str = include_str!("../../../../shaders/slab_model_check.wgsl");
+const MULTIPLE_AT_VERTEX: &str = include_str!("../../../../shaders/multiple_at_vertex.wgsl");
 
 /// Where the model is evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -170,13 +175,15 @@ pub enum TargetFormat {
     Rgba16Float,
 }
 
-/// A pipeline variant: path, dual-source output (per-channel τ1), thickness texture, all-orders model.
+/// A pipeline variant: path, dual-source output (per-channel τ1), thickness texture, all-orders model,
+/// and for the per-fragment path with all orders whether the table is looked up per vertex.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
     path: EvaluationPath,
     dual: bool,
     thickness: bool,
     all_orders: bool,
+    multiple_at_vertex: bool,
 }
 
 #[repr(C)]
@@ -243,8 +250,13 @@ pub struct HeadlessRenderer {
     sampler: wgpu::Sampler,
     bind_group_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
+    /// Group 1 of the per-vertex all-orders pass: the mesh's vertices in, the multiple part out.
+    multiple_layout: wgpu::BindGroupLayout,
+    multiple_pipeline_layout: wgpu::PipelineLayout,
     modules: HashMap<bool, wgpu::ShaderModule>,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    /// The per-vertex all-orders pass per (per-channel τ1, thickness texture).
+    multiple_pipelines: HashMap<(bool, bool), wgpu::ComputePipeline>,
     background_pipeline: Option<wgpu::RenderPipeline>,
     albedo: GpuTexture,
     thickness: GpuTexture,
@@ -252,6 +264,8 @@ pub struct HeadlessRenderer {
     table: GpuTable,
     vertex_buffer: Option<(wgpu::Buffer, usize)>,
     cpu_buffer: Option<(wgpu::Buffer, usize)>,
+    /// The multiple part per vertex, both faces (6 floats per vertex), written by the compute pass.
+    multiple_buffer: Option<(wgpu::Buffer, usize)>,
     index_buffer: Option<(wgpu::Buffer, usize)>,
     sorted_indices: Vec<u32>,
     vertex_scratch: Vec<Vertex>,
@@ -383,9 +397,12 @@ impl HeadlessRenderer {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        // Every binding is also visible to compute: the per-vertex all-orders pass reads the frame, the
+        // textures and the table.
+        let all_stages = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let texture_entry = |binding: u32, filterable: bool| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            visibility: all_stages,
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable },
                 view_dimension: wgpu::TextureViewDimension::D2,
@@ -408,7 +425,7 @@ impl HeadlessRenderer {
             entries: &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    visibility: all_stages,
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
@@ -420,7 +437,7 @@ impl HeadlessRenderer {
                 texture_entry(2, true),
                 wgpu::BindGroupLayoutEntry {
                     binding: 3,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    visibility: all_stages,
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
@@ -445,6 +462,26 @@ impl HeadlessRenderer {
             bind_group_layouts: &[Some(&bind_group_layout)],
             immediate_size: 0,
         });
+        let storage_entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let multiple_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("multiple at vertex"),
+            entries: &[storage_entry(0, true), storage_entry(1, false)],
+        });
+        let multiple_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("multiple at vertex"),
+                bind_group_layouts: &[Some(&bind_group_layout), Some(&multiple_layout)],
+                immediate_size: 0,
+            });
         let white = Texture2d::uniform([1.0; 4])?;
         let albedo =
             Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba16Float);
@@ -477,8 +514,11 @@ impl HeadlessRenderer {
             sampler,
             bind_group_layout,
             pipeline_layout,
+            multiple_layout,
+            multiple_pipeline_layout,
             modules: HashMap::new(),
             pipelines: HashMap::new(),
+            multiple_pipelines: HashMap::new(),
             background_pipeline: None,
             albedo,
             thickness,
@@ -486,6 +526,7 @@ impl HeadlessRenderer {
             table,
             vertex_buffer: None,
             cpu_buffer: None,
+            multiple_buffer: None,
             index_buffer: None,
             sorted_indices: Vec::new(),
             vertex_scratch: Vec::new(),
@@ -575,6 +616,9 @@ impl HeadlessRenderer {
             // The baseline ignores the scattering model.
             all_orders: path != EvaluationPath::Baseline
                 && matches!(shading.scattering, Scattering::AllOrders(_)),
+            multiple_at_vertex: path == EvaluationPath::PerFragment
+                && matches!(shading.scattering, Scattering::AllOrders(_))
+                && shading.all_orders_sampling == AllOrdersSampling::PerVertex,
         };
         self.pipeline(key)?;
         let bind_group = self.bind_group();
@@ -583,6 +627,9 @@ impl HeadlessRenderer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("frame"),
             });
+        if key.multiple_at_vertex {
+            self.encode_multiple_at_vertex(&mut encoder, &bind_group, key, mesh.positions.len())?;
+        }
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("slab pass"),
@@ -615,6 +662,11 @@ impl HeadlessRenderer {
             {
                 pass.set_vertex_buffer(1, buffer.slice(..));
             }
+            if key.multiple_at_vertex
+                && let Some((buffer, _)) = &self.multiple_buffer
+            {
+                pass.set_vertex_buffer(1, buffer.slice(..));
+            }
             if let Some((buffer, _)) = &self.index_buffer {
                 pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
             }
@@ -628,6 +680,87 @@ impl HeadlessRenderer {
         let gpu = submitted.elapsed();
         self.take_uncaptured()?;
         Ok(gpu)
+    }
+
+    /// Encodes the per-vertex all-orders pass (`cs_multiple_at_vertex`): the table's multiple part for
+    /// both faces at each of the mesh's `vertex_count` vertices, into `multiple_buffer`.
+    fn encode_multiple_at_vertex(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame_bindings: &wgpu::BindGroup,
+        key: PipelineKey,
+        vertex_count: usize,
+    ) -> Result<(), RenderError> {
+        let size = vertex_count * std::mem::size_of::<VertexSlab>();
+        if !matches!(&self.multiple_buffer, Some((_, capacity)) if *capacity == size) {
+            let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("multiple at vertex"),
+                size: size as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
+                mapped_at_creation: false,
+            });
+            self.multiple_buffer = Some((buffer, size));
+        }
+        let variant = (key.dual, key.thickness);
+        if !self.multiple_pipelines.contains_key(&variant) {
+            let module = self.module(key.dual)?;
+            let constants = [
+                ("per_channel_thickness", if key.dual { 1.0 } else { 0.0 }),
+                (
+                    "has_thickness_texture",
+                    if key.thickness { 1.0 } else { 0.0 },
+                ),
+                ("all_orders", 1.0),
+            ];
+            let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let pipeline = self
+                .device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("multiple at vertex"),
+                    layout: Some(&self.multiple_pipeline_layout),
+                    module: &module,
+                    entry_point: Some("cs_multiple_at_vertex"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                });
+            if let Some(error) = pollster::block_on(scope.pop()) {
+                return Err(RenderError::Gpu(format!(
+                    "multiple-at-vertex pipeline: {error}"
+                )));
+            }
+            self.multiple_pipelines.insert(variant, pipeline);
+        }
+        let (Some((vertices, _)), Some((multiple, _))) =
+            (&self.vertex_buffer, &self.multiple_buffer)
+        else {
+            return Ok(()); // no vertices: nothing to draw either
+        };
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("multiple at vertex"),
+            layout: &self.multiple_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: vertices.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: multiple.as_entire_binding(),
+                },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("multiple at vertex"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.multiple_pipelines[&variant]);
+        pass.set_bind_group(0, frame_bindings, &[]);
+        pass.set_bind_group(1, &bind_group, &[]);
+        pass.dispatch_workgroups((vertex_count as u32).div_ceil(64), 1, 1);
+        Ok(())
     }
 
     /// Reads the last rendered frame back as linear radiance.
@@ -1231,7 +1364,8 @@ impl HeadlessRenderer {
             &self.queue,
             &mut self.vertex_buffer,
             bytemuck::cast_slice(&vertices),
-            wgpu::BufferUsages::VERTEX,
+            // Storage: the per-vertex all-orders pass reads it.
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
         );
         self.vertex_scratch = vertices;
         sort_back_to_front(mesh, camera.eye, &mut self.sorted_indices);
@@ -1284,10 +1418,11 @@ impl HeadlessRenderer {
             return Ok(module.clone());
         }
         let source = format!(
-            "{}\n{}\n{}",
+            "{}\n{}\n{}\n{}",
             if dual { OUTPUT_DUAL } else { OUTPUT_SINGLE },
             LIT_SIDE,
-            SHADER_BODY
+            SHADER_BODY,
+            MULTIPLE_AT_VERTEX
         );
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = self
@@ -1352,9 +1487,14 @@ impl HeadlessRenderer {
             dual,
             thickness,
             all_orders,
+            multiple_at_vertex,
         } = key;
         let module = self.module(dual)?;
-        let (vertex_entry, fragment_entry) = path.entry_points();
+        let (vertex_entry, fragment_entry) = if multiple_at_vertex {
+            ("vs_multiple_at_vertex", "fs_multiple_at_vertex")
+        } else {
+            path.entry_points()
+        };
         let mesh_attributes =
             wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
         let cpu_attributes = wgpu::vertex_attr_array![3 => Float32x3, 4 => Float32x3];
@@ -1363,7 +1503,8 @@ impl HeadlessRenderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &mesh_attributes,
         })];
-        if path == EvaluationPath::Cpu {
+        // Buffer 1: the CPU path's per-vertex values, or the multiple part per vertex (both 2 × vec3).
+        if path == EvaluationPath::Cpu || multiple_at_vertex {
             buffers.push(Some(wgpu::VertexBufferLayout {
                 array_stride: std::mem::size_of::<VertexSlab>() as u64,
                 step_mode: wgpu::VertexStepMode::Vertex,

@@ -348,6 +348,38 @@ pub struct ShadingParams {
     pub baseline_transmittance: f32,
     /// Single scattering (the paper) or all orders (eqs. 4–5 plus the table's multiple part).
     pub scattering: Scattering,
+    /// Where the per-fragment path looks the all-orders table up (the other paths evaluate everything
+    /// per vertex anyway).
+    pub all_orders_sampling: AllOrdersSampling,
+}
+
+/// Where [`EvaluationPath::PerFragment`](super::EvaluationPath::PerFragment) looks the all-orders table
+/// up. Single scattering (eqs. 4–5), α, the irradiance, μ0 and Λ are per fragment either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum AllOrdersSampling {
+    /// In every fragment (twelve texel loads): exact to the table everywhere; on lavapipe about 1.8×
+    /// the frame time of single scattering.
+    #[default]
+    PerFragment,
+    /// Once per mesh vertex per frame (a compute pass), for both faces; the table's reduced value
+    /// f = L_m/(Λ²μ0) is interpolated and each fragment picks its face and multiplies by its own
+    /// Λ²·μ0·E. About 1.1× single scattering; errs where f is not linear over a triangle: at Λ edges of
+    /// the albedo texture and along folds where μ or μ0 → 0 (measured in the workspace's
+    /// tests/render.rs and the README).
+    PerVertex,
+}
+
+impl AllOrdersSampling {
+    /// Both, the default first.
+    pub const ALL: [Self; 2] = [Self::PerFragment, Self::PerVertex];
+
+    /// The user-facing name: `per-vertex` or `per-fragment`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::PerVertex => "per-vertex",
+            Self::PerFragment => "per-fragment",
+        }
+    }
 }
 
 impl ShadingParams {
@@ -369,6 +401,7 @@ impl ShadingParams {
             exposure: 1.0,
             baseline_transmittance: 0.2,
             scattering: Scattering::Single,
+            all_orders_sampling: AllOrdersSampling::default(),
         };
         params.validate()?;
         Ok(params)
