@@ -186,6 +186,22 @@ struct PipelineKey {
     multiple_at_vertex: bool,
 }
 
+impl PipelineKey {
+    /// The shader's override constants for this variant. They specialise the shader at pipeline
+    /// creation: per-channel τ1 evaluates the model three times, grey τ1 once; the thickness texture is
+    /// sampled only when there is one (a software rasteriser would otherwise pay for the masked-off
+    /// sample); the all-orders lookup exists only in all-orders pipelines, so single scattering runs
+    /// exactly the code it ran before.
+    fn override_constants(self) -> [(&'static str, f64); 3] {
+        let flag = |on: bool| if on { 1.0 } else { 0.0 };
+        [
+            ("per_channel_thickness", flag(self.dual)),
+            ("has_thickness_texture", flag(self.thickness)),
+            ("all_orders", flag(self.all_orders)),
+        ]
+    }
+}
+
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct FrameUniform {
@@ -250,9 +266,11 @@ pub struct HeadlessRenderer {
     sampler: wgpu::Sampler,
     bind_group_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// Group 1 of the per-vertex all-orders pass: the mesh's vertices in, the multiple part out.
-    multiple_layout: wgpu::BindGroupLayout,
-    multiple_pipeline_layout: wgpu::PipelineLayout,
+    /// Group 1 of the renderer's compute passes: one storage buffer in (binding 0), one out (binding 1)
+    /// — the per-vertex all-orders pass (mesh vertices in, multiple part out) and the model checks.
+    compute_io_layout: wgpu::BindGroupLayout,
+    /// Group 0 (the frame's bindings) and group 1 [`compute_io_layout`](Self::compute_io_layout).
+    compute_io_pipeline_layout: wgpu::PipelineLayout,
     modules: HashMap<bool, wgpu::ShaderModule>,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
     /// The per-vertex all-orders pass per (per-channel τ1, thickness texture).
@@ -472,14 +490,14 @@ impl HeadlessRenderer {
             },
             count: None,
         };
-        let multiple_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("multiple at vertex"),
+        let compute_io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compute io"),
             entries: &[storage_entry(0, true), storage_entry(1, false)],
         });
-        let multiple_pipeline_layout =
+        let compute_io_pipeline_layout =
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("multiple at vertex"),
-                bind_group_layouts: &[Some(&bind_group_layout), Some(&multiple_layout)],
+                label: Some("compute io"),
+                bind_group_layouts: &[Some(&bind_group_layout), Some(&compute_io_layout)],
                 immediate_size: 0,
             });
         let white = Texture2d::uniform([1.0; 4])?;
@@ -514,8 +532,8 @@ impl HeadlessRenderer {
             sampler,
             bind_group_layout,
             pipeline_layout,
-            multiple_layout,
-            multiple_pipeline_layout,
+            compute_io_layout,
+            compute_io_pipeline_layout,
             modules: HashMap::new(),
             pipelines: HashMap::new(),
             multiple_pipelines: HashMap::new(),
@@ -704,20 +722,13 @@ impl HeadlessRenderer {
         let variant = (key.dual, key.thickness);
         if !self.multiple_pipelines.contains_key(&variant) {
             let module = self.module(key.dual)?;
-            let constants = [
-                ("per_channel_thickness", if key.dual { 1.0 } else { 0.0 }),
-                (
-                    "has_thickness_texture",
-                    if key.thickness { 1.0 } else { 0.0 },
-                ),
-                ("all_orders", 1.0),
-            ];
+            let constants = key.override_constants();
             let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
             let pipeline = self
                 .device
                 .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some("multiple at vertex"),
-                    layout: Some(&self.multiple_pipeline_layout),
+                    layout: Some(&self.compute_io_pipeline_layout),
                     module: &module,
                     entry_point: Some("cs_multiple_at_vertex"),
                     compilation_options: wgpu::PipelineCompilationOptions {
@@ -740,7 +751,7 @@ impl HeadlessRenderer {
         };
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("multiple at vertex"),
-            layout: &self.multiple_layout,
+            layout: &self.compute_io_layout,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
@@ -879,35 +890,14 @@ impl HeadlessRenderer {
                 label: Some("slab model check"),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let check_layout = self
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("model check"),
-                entries: &[storage(0, true), storage(1, false)],
-            });
-        let layout = frame_bindings.map(|_| {
-            self.device
-                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("model check"),
-                    bind_group_layouts: &[Some(&self.bind_group_layout), Some(&check_layout)],
-                    immediate_size: 0,
-                })
-        });
+        // With the frame's group 0: the same layout as the per-vertex all-orders pass (group 1 one
+        // storage buffer in, one out); without: derived from the entry point.
+        let layout = frame_bindings.map(|_| &self.compute_io_pipeline_layout);
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("slab model check"),
-                layout: layout.as_ref(),
+                layout,
                 module: &module,
                 entry_point: Some(entry_point),
                 compilation_options: Default::default(),
@@ -949,7 +939,7 @@ impl HeadlessRenderer {
         ];
         let derived_layout;
         let check_group_layout = if frame_bindings.is_some() {
-            &check_layout
+            &self.compute_io_layout
         } else {
             derived_layout = pipeline.get_bind_group_layout(1);
             &derived_layout
@@ -1485,9 +1475,8 @@ impl HeadlessRenderer {
         let PipelineKey {
             path,
             dual,
-            thickness,
-            all_orders,
             multiple_at_vertex,
+            ..
         } = key;
         let module = self.module(dual)?;
         let (vertex_entry, fragment_entry) = if multiple_at_vertex {
@@ -1530,15 +1519,7 @@ impl HeadlessRenderer {
                 operation: wgpu::BlendOperation::Add,
             },
         };
-        // Specialises the shader at pipeline creation: per-channel τ1 evaluates the model three times,
-        // grey τ1 once; the thickness texture is sampled only when there is one (a software rasteriser
-        // would otherwise pay for the masked-off sample); the all-orders lookup exists only in
-        // all-orders pipelines, so single scattering runs exactly the code it ran before.
-        let constants = [
-            ("per_channel_thickness", if dual { 1.0 } else { 0.0 }),
-            ("has_thickness_texture", if thickness { 1.0 } else { 0.0 }),
-            ("all_orders", if all_orders { 1.0 } else { 0.0 }),
-        ];
+        let constants = key.override_constants();
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = self
             .device
