@@ -32,18 +32,21 @@ fn read_exr(path: &Path) -> image::Rgba32FImage {
     image::open(path).unwrap().to_rgba32f()
 }
 
-/// Writes `toml` to `dir/name.toml`, renders it with `sheer render` to `dir/name.exr` and reads that back.
-fn render_scene_to_exr(dir: &Path, name: &str, toml: &str) -> image::Rgba32FImage {
+/// Writes `toml` to `dir/name.toml`, renders it with `sheer render` (plus `extra` arguments) to
+/// `dir/name.exr` and reads that back.
+fn render_scene_to_exr(dir: &Path, name: &str, toml: &str, extra: &[&str]) -> image::Rgba32FImage {
     let scene = dir.join(format!("{name}.toml"));
     std::fs::write(&scene, toml).unwrap();
     let out = dir.join(format!("{name}.exr"));
-    sheer_ok(&[
+    let mut args = vec![
         "render",
         "--scene",
         scene.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    sheer_ok(&args);
     read_exr(&out)
 }
 
@@ -181,7 +184,7 @@ fn a_default_scene_frame_shows_the_flag_where_it_should_be() {
 #[test]
 fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
     // A flat sheet facing the camera, light straight in front of it at 1 m: μ = μ0 ≈ 1 at the centre.
-    let image = render_scene_to_exr(&scratch("static"), "sheet", STATIC_SHEET);
+    let image = render_scene_to_exr(&scratch("static"), "sheet", STATIC_SHEET, &[]);
     let centre = image.get_pixel(256, 256).0;
     // By hand: E = Φ/(4πr²) normal to the beam; μ = μ0 = 1; τ1 = 2, Λ = 0.8;
     // L+ = Λ/(4π) E μ0/(μ+μ0) (1 − e^(−τ1(1/μ+1/μ0))) (eq. 4), α = e^(−τ1/μ), L = 0.3 α + L+ (eq. 9).
@@ -216,6 +219,7 @@ fn a_light_on_a_vertex_gives_no_nan_pixel() {
          [shading]\npath = \"vertex\"\n\
          [camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_degrees = 30.0\n\
          [light]\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\nperiod = 0.0\nphase = 0.0\nflux = 50.0\nmarker = false\n",
+        &[],
     );
     let bad = image
         .pixels()
@@ -265,7 +269,7 @@ fn the_all_orders_scene_key_renders_what_sheer_slab_computes() {
     let dir = scratch("all-orders");
     let render = |scattering: &str| {
         let toml = format!("{STATIC_SHEET}[shading]\nscattering = \"{scattering}\"\n");
-        render_scene_to_exr(&dir, scattering, &toml)
+        render_scene_to_exr(&dir, scattering, &toml, &[])
             .get_pixel(256, 256)
             .0
     };
@@ -375,19 +379,7 @@ fn all_orders_table_per_vertex_sits_between_per_fragment_and_the_per_vertex_path
                 assets.join("faroe_flag.png"),
                 assets.join("faroe_landscape.png")
             );
-            let scene = dir.join(format!("{name}-{time}.toml"));
-            std::fs::write(&scene, toml).unwrap();
-            let out = dir.join(format!("{name}-{time}.exr"));
-            sheer_ok(&[
-                "render",
-                "--scene",
-                scene.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--time",
-                time,
-            ]);
-            read_exr(&out)
+            render_scene_to_exr(&dir, &format!("{name}-{time}"), &toml, &["--time", time])
         };
         let exact = render("fragment", "all_orders_lookup = \"fragment\"");
         let table_per_vertex = render("table-per-vertex", "all_orders_lookup = \"vertex\"");
