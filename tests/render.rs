@@ -182,6 +182,39 @@ fn a_default_scene_frame_shows_the_flag_where_it_should_be() {
 }
 
 #[test]
+fn the_light_marker_shows_through_the_cloth_when_the_light_is_behind_it() {
+    // The static sheet back-lit from straight behind (phase π): the light projects onto the sheet's
+    // centre. With the marker on, the centre differs from the marker-free render by exactly
+    // α·(L_marker − L_background) (the marker takes the background's place under the sheet, eq. 9),
+    // not by the whole marker, as it would if it were drawn over the cloth.
+    let dir = scratch("marker");
+    let behind = STATIC_SHEET.replace("phase = 0.0", &format!("phase = {}", std::f32::consts::PI));
+    let without = render_scene_to_exr(&dir, "without", &behind, &[]);
+    let with = render_scene_to_exr(
+        &dir,
+        "with",
+        &behind.replace("marker = false", "marker = true"),
+        &[],
+    );
+    let (plain, marked) = (without.get_pixel(256, 256).0, with.get_pixel(256, 256).0);
+    let alpha = plain[3];
+    // τ1 = 2 seen along the normal: α = e^(−2) (16-bit float target at worst).
+    assert!(
+        (f64::from(alpha) / (-2.0f64).exp() - 1.0).abs() < 1e-3,
+        "α = {alpha}"
+    );
+    assert_eq!(marked[3], alpha, "the marker leaves α alone");
+    for (channel, marker) in [4.0f32, 3.6, 2.4].into_iter().enumerate() {
+        let expected = plain[channel] + alpha * (marker - 0.3);
+        assert!(
+            (marked[channel] - expected).abs() < 2e-3 * expected,
+            "channel {channel}: {} vs {expected} (marker drawn over the cloth: {marker})",
+            marked[channel]
+        );
+    }
+}
+
+#[test]
 fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
     // A flat sheet facing the camera, light straight in front of it at 1 m: μ = μ0 ≈ 1 at the centre.
     let image = render_scene_to_exr(&scratch("static"), "sheet", STATIC_SHEET, &[]);

@@ -387,7 +387,12 @@ impl FrameRenderer {
             draw_pole(&mut image, scene, flag.light_position());
         }
         if scene.light.marker {
-            draw_light_marker(&mut image, &camera(scene), flag.light_position());
+            let camera = camera(scene);
+            let light = flag.light_position();
+            // Behind the cloth the marker is seen through it, as the background is (eq. 9).
+            let seen_through =
+                segment_crosses_mesh(camera.eye, light, &flag.mesh).then_some(&self.background);
+            draw_light_marker(&mut image, &camera, light, seen_through);
         }
         Ok(image)
     }
@@ -503,9 +508,42 @@ fn draw_pole(image: &mut LinearImage, scene: &Scene, light: Vec3) {
     }
 }
 
-/// A small bright disc where the light is (drawn over the frame; it marks the light, it does not
-/// model it).
-fn draw_light_marker(image: &mut LinearImage, camera: &Camera, light: Vec3) {
+/// The marker's disc, linear W/(m²·sr): a warm white well above the flag's radiance.
+const MARKER_RADIANCE: [f32; 3] = [4.0, 3.6, 2.4];
+
+/// Whether the segment from `from` to `to` passes through a triangle of `mesh` (Möller & Trumbore
+/// 1997, "Fast, minimum storage ray–triangle intersection"); degenerate triangles are missed.
+fn segment_crosses_mesh(from: Vec3, to: Vec3, mesh: &SlabMesh) -> bool {
+    let direction = to - from;
+    mesh.indices.chunks_exact(3).any(|triangle| {
+        let [a, b, c] = [0, 1, 2].map(|k| Vec3::from_array(mesh.positions[triangle[k] as usize]));
+        let (edge1, edge2) = (b - a, c - a);
+        let p = direction.cross(edge2);
+        let determinant = edge1.dot(p);
+        if determinant.abs() < 1e-12 {
+            return false; // parallel to the triangle's plane, or a degenerate triangle
+        }
+        let inverse = 1.0 / determinant;
+        let offset = from - a;
+        let u = offset.dot(p) * inverse;
+        let q = offset.cross(edge1);
+        let v = direction.dot(q) * inverse;
+        let t = edge2.dot(q) * inverse;
+        u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0
+    })
+}
+
+/// A small bright disc with a black rim where the light is (it marks the light, it does not model
+/// it). Drawn over the frame, or, when `seen_through` gives the background because the cloth lies
+/// between the eye and the light, behind the cloth: in each pixel the marker takes the background's
+/// place under the layers' transmittance α (alpha channel), `L = L_cloth + α·L_marker` with
+/// `L_cloth = L − α·L_background` (eq. 9), so the light shows through thin fabric as it should.
+fn draw_light_marker(
+    image: &mut LinearImage,
+    camera: &Camera,
+    light: Vec3,
+    seen_through: Option<&Background>,
+) {
     let clip = camera.view_projection(image.width, image.height) * light.extend(1.0);
     if clip.w <= 0.0 {
         return; // behind the camera
@@ -520,11 +558,92 @@ fn draw_light_marker(image: &mut LinearImage, camera: &Camera, light: Vec3) {
         for x in (x0 as u32)..(x1.min(image.width as f32) as u32) {
             let d = ((x as f32 + 0.5 - cx).powi(2) + (y as f32 + 0.5 - cy).powi(2)).sqrt();
             let i = (y * image.width + x) as usize;
-            if d <= radius {
-                image.pixels[i] = [4.0, 3.6, 2.4, image.pixels[i][3]];
+            let marker = if d <= radius {
+                MARKER_RADIANCE
             } else if d <= radius + 1.5 {
-                image.pixels[i] = [0.0, 0.0, 0.0, image.pixels[i][3]];
+                [0.0; 3]
+            } else {
+                continue;
+            };
+            let pixel = &mut image.pixels[i];
+            let alpha = pixel[3];
+            for channel in 0..3 {
+                pixel[channel] = match seen_through {
+                    None => marker[channel],
+                    Some(background) => {
+                        let behind = match background {
+                            Background::Uniform(colour) => colour[channel],
+                            Background::Image(texture) => texture.texels()[i][channel],
+                        };
+                        // max(): L − α·L_background is the cloth's own radiance, ≥ 0 but for rounding.
+                        (pixel[channel] - alpha * behind).max(0.0) + alpha * marker[channel]
+                    }
+                };
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 1 m sheet in the plane z = 0 around the origin, 4 × 4 cells.
+    fn sheet() -> SlabMesh {
+        SlabMesh::flat_sheet(Vec3::new(-0.5, -0.5, 0.0), Vec3::X, Vec3::Y, Vec3::Z, 4, 4).unwrap()
+    }
+
+    #[test]
+    fn a_segment_through_the_sheet_crosses_it_and_one_that_stops_short_does_not() {
+        let mesh = sheet();
+        let eye = Vec3::new(0.1, 0.2, 3.0);
+        assert!(segment_crosses_mesh(eye, Vec3::new(0.1, 0.2, -1.0), &mesh));
+        assert!(!segment_crosses_mesh(eye, Vec3::new(0.1, 0.2, 0.5), &mesh));
+        // Beside the sheet, and parallel to it.
+        assert!(!segment_crosses_mesh(eye, Vec3::new(2.0, 0.2, -1.0), &mesh));
+        assert!(!segment_crosses_mesh(
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            &mesh
+        ));
+    }
+
+    /// The marker's centre pixel after drawing it over a uniform image of cloth radiance 0.3 with
+    /// transmittance α = 0.25 over a background of 0.2, light straight ahead of the camera.
+    fn marker_centre(seen_through: Option<&Background>) -> [f32; 4] {
+        let (width, height) = (64, 48);
+        let mut image = LinearImage {
+            width,
+            height,
+            pixels: vec![[0.3, 0.3, 0.3, 0.25]; (width * height) as usize],
+        };
+        let camera = Camera {
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            vertical_fov: 0.5,
+            near: 0.05,
+            far: 100.0,
+        };
+        draw_light_marker(&mut image, &camera, Vec3::ZERO, seen_through);
+        image.pixels[(height / 2 * width + width / 2) as usize]
+    }
+
+    #[test]
+    fn the_marker_is_drawn_over_the_frame_or_seen_through_the_cloth() {
+        // In front: the marker replaces the pixel's radiance; α is kept.
+        let front = marker_centre(None);
+        assert_eq!(front, [4.0, 3.6, 2.4, 0.25]);
+        // Behind: it takes the background's place under α (eq. 9): (0.3 − 0.25·0.2) + 0.25·L_marker.
+        let behind = marker_centre(Some(&Background::Uniform([0.2; 3])));
+        for (channel, marker) in MARKER_RADIANCE.iter().enumerate() {
+            let expected = (0.3 - 0.25 * 0.2) + 0.25 * marker;
+            assert!(
+                (behind[channel] - expected).abs() < 1e-6,
+                "channel {channel}: {} vs {expected}",
+                behind[channel]
+            );
+        }
+        assert_eq!(behind[3], 0.25);
     }
 }
