@@ -941,6 +941,7 @@ mod key_tests {
         ("simulation.wind.gust_frequency", "0.75"),
         ("simulation.wind.seed", "7"),
         ("simulation.wind.per_substep", "false"),
+        ("simulation.wind.substeps_per_update", "4"),
         ("simulation.divergence.max_speed", "150.0"),
         ("simulation.divergence.max_strain", "5.0"),
         ("shading.model", "\"split\""),
@@ -1325,6 +1326,10 @@ mod key_tests {
             (
                 "[simulation.wind]\ngust_frequency = 0.0".into(),
                 "simulation.wind.gust_frequency",
+            ),
+            (
+                "[simulation.wind]\nsubsteps_per_update = 0".into(),
+                "simulation.wind.substeps_per_update",
             ),
             (
                 "[simulation.divergence]\nmax_speed = 0.0".into(),

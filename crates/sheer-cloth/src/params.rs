@@ -251,6 +251,10 @@ pub struct Wind {
     /// rate `ρ C_D |u| / (2 × areal density)` times the frame time must stay well below 2, which fails
     /// for light fabric in strong wind (0.1 kg/m² at 10–12 m/s diverges at 60 Hz; tested).
     pub per_substep: bool,
+    /// With `per_substep`: re-evaluate every this many sub-steps and hold the forces in between (1, the
+    /// default: every sub-step). Between every sub-step and once per frame in cost and error (measured
+    /// by `sheer study ablation`, docs/study.md).
+    pub substeps_per_update: u32,
 }
 
 impl Default for Wind {
@@ -265,6 +269,7 @@ impl Default for Wind {
             gust_frequency: 0.5,
             seed: 1,
             per_substep: true,
+            substeps_per_update: 1,
         }
     }
 }
@@ -284,6 +289,13 @@ impl Wind {
         non_negative("wind.gust_strength", self.gust_strength)?;
         non_negative("wind.turbulence", self.turbulence)?;
         positive("wind.gust_frequency", self.gust_frequency)?;
+        if self.substeps_per_update == 0 {
+            return Err(ParamError::new(
+                "wind.substeps_per_update",
+                0.0,
+                "must be at least 1",
+            ));
+        }
         Ok(())
     }
 }

@@ -330,8 +330,15 @@ impl Simulation {
             substeps,
             ..StepInfo::default()
         };
+        let wind = self.params.wind;
         for s in 0..substeps {
             let t = self.time + s as f64 * h;
+            // `wind.substeps_per_update` > 1: the held aerodynamic forces are renewed at the first
+            // force evaluation of every k-th sub-step (k = 1 renews them at every evaluation).
+            if wind.per_substep && wind.substeps_per_update > 1 && s % wind.substeps_per_update == 0
+            {
+                self.wind_stale = true;
+            }
             self.prescribe_pins(s, substeps, h);
             match self.params.method {
                 Method::ExplicitEuler { .. } => self.explicit_euler_substep(h, t),
@@ -424,7 +431,8 @@ impl Simulation {
         } = self;
         let (positions, velocities) = (&positions[..], &velocities[..]);
         let wind_active = params.wind.is_active() && !triangles.is_empty();
-        let refresh_wind = wind_active && (*wind_stale || params.wind.per_substep);
+        let every_call = params.wind.per_substep && params.wind.substeps_per_update == 1;
+        let refresh_wind = wind_active && (*wind_stale || every_call);
         let air_velocity = wind.air_velocity(time);
         let wind_params = *wind.params();
         let triangle_force = |t: usize| {

@@ -128,6 +128,30 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
 }
 
 #[test]
+fn wind_updated_every_few_sub_steps_lies_between_every_sub_step_and_once_per_frame() {
+    // The default method takes 20 sub-steps per frame: updating the wind every 20 is exactly holding it
+    // for the frame, bit for bit; every 2 is neither that nor every sub-step (the setting is used).
+    let run = |per_substep: bool, substeps_per_update: u32| {
+        let mut sim = windy_flag(Method::default(), usize::MAX);
+        let mut params = sim.params().clone();
+        params.wind.per_substep = per_substep;
+        params.wind.substeps_per_update = substeps_per_update;
+        sim.set_params(params).unwrap();
+        for _ in 0..10 {
+            sim.step(1.0 / 60.0).unwrap();
+        }
+        bits(&sim)
+    };
+    assert_eq!(Method::default().substeps(), 20);
+    let held = run(false, 1);
+    assert_eq!(run(true, 20), held);
+    let every = run(true, 1);
+    let every_other = run(true, 2);
+    assert_ne!(every_other, every);
+    assert_ne!(every_other, held);
+}
+
+#[test]
 fn changing_stiffness_or_method_mid_run_does_not_jerk_the_cloth() {
     let mut sim = windy_flag(Method::default(), usize::MAX);
     let mut motion = Vec::new(); // largest particle displacement per frame, m
@@ -300,6 +324,10 @@ fn invalid_parameters_and_time_steps_are_typed_errors() {
         }
     };
     assert_eq!(bad(&|p| p.stretch.stiffness = 0.0), "stretch.stiffness");
+    assert_eq!(
+        bad(&|p| p.wind.substeps_per_update = 0),
+        "wind.substeps_per_update"
+    );
     assert_eq!(bad(&|p| p.shear.stiffness = f64::NAN), "shear.stiffness");
     assert_eq!(bad(&|p| p.bend.damping = -1.0), "bend.damping");
     assert_eq!(bad(&|p| p.stretch.damping = -1.0), "stretch.damping");

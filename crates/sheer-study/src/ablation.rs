@@ -137,19 +137,6 @@ pub fn ablation(
             method,
         },
         Variant {
-            // The wind's forces follow the cloth every sub-step; held for a whole frame they would
-            // cost 1/20 as much (they are 39 % of a frame's CPU time, README of sheer-cloth).
-            part: "wind every sub-step",
-            setting: if scene.params.wind.per_substep {
-                "off (once per frame)"
-            } else {
-                "on"
-            }
-            .into(),
-            scene: with_params(scene, |p| p.wind.per_substep = !p.wind.per_substep),
-            method,
-        },
-        Variant {
             part: "long-range attachments",
             setting: if attachments { "off" } else { "on" }.into(),
             scene: with_params(scene, |p| p.long_range_attachments = !attachments),
@@ -172,6 +159,35 @@ pub fn ablation(
             method: Method::SymplecticEuler { substeps: 200 },
         },
     ];
+    // The wind's forces follow the cloth every sub-step; held for a few sub-steps or a whole frame they
+    // cost less (the wind is about half the default flag's CPU time, docs/study.md).
+    let wind = scene.params.wind;
+    if wind.per_substep && wind.substeps_per_update == 1 {
+        for interval in [2, 4, 10] {
+            variants.push(Variant {
+                part: "wind every sub-step",
+                setting: format!("every {interval} sub-steps"),
+                scene: with_params(scene, |p| p.wind.substeps_per_update = interval),
+                method,
+            });
+        }
+        variants.push(Variant {
+            part: "wind every sub-step",
+            setting: "off (once per frame)".into(),
+            scene: with_params(scene, |p| p.wind.per_substep = false),
+            method,
+        });
+    } else {
+        variants.push(Variant {
+            part: "wind every sub-step",
+            setting: "on".into(),
+            scene: with_params(scene, |p| {
+                p.wind.per_substep = true;
+                p.wind.substeps_per_update = 1;
+            }),
+            method,
+        });
+    }
     for &(columns, rows) in grids {
         if (columns, rows) == (scene.grid.columns, scene.grid.rows) {
             continue;
