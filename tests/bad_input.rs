@@ -92,6 +92,11 @@ fn options_that_do_not_go_together_are_one_line_usage_errors() {
     assert_one_line_error(&["render", "--time"], 2, &["--time"]);
     assert_one_line_error(&["simulate", "--frames", "-1"], 2, &["--frames", "-1"]);
     assert_one_line_error(&["bench", "sim", "--threads", "-2"], 2, &["--threads"]);
+    assert_one_line_error(
+        &["bench", "sim", "--wind-substeps-per-update", "0"],
+        1,
+        &["--wind-substeps-per-update"],
+    );
     // Missing required arguments are listed on the same line.
     assert_one_line_error(&["figure2"], 2, &["--out"]);
 }

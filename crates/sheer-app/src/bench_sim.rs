@@ -35,6 +35,10 @@ pub struct BenchSimArgs {
     /// 0 forces the parallel code paths on, for finding the crossover).
     #[arg(long, allow_negative_numbers = true)]
     pub parallel_min_particles: Option<usize>,
+    /// Update the wind's forces every this many sub-steps and hold them in between
+    /// (`wind.substeps_per_update`; 1: every sub-step, the default).
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    pub wind_substeps_per_update: u32,
     /// Minimum measuring time per case, seconds (at least one frame is always timed).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
@@ -124,6 +128,7 @@ pub fn flag_simulation(
     rows: usize,
     method: Method,
     parallel_min_particles: Option<usize>,
+    wind_substeps_per_update: u32,
 ) -> Result<Simulation, CliError> {
     let spec = GridSpec {
         columns,
@@ -136,6 +141,7 @@ pub fn flag_simulation(
         ..SimParams::default()
     };
     params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
+    params.wind.substeps_per_update = wind_substeps_per_update;
     if let Some(threshold) = parallel_min_particles {
         params.parallel_min_particles = threshold;
     }
@@ -149,13 +155,20 @@ fn measure(
     threads: usize,
     minimum: Duration,
     parallel_min_particles: Option<usize>,
+    wind_substeps_per_update: u32,
 ) -> Result<Measurement, CliError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::new(format!("cannot start {threads} threads: {e}")))?;
     pool.install(|| {
-        let mut sim = flag_simulation(columns, rows, method, parallel_min_particles)?;
+        let mut sim = flag_simulation(
+            columns,
+            rows,
+            method,
+            parallel_min_particles,
+            wind_substeps_per_update,
+        )?;
         let mut result = Measurement {
             method,
             columns,
@@ -224,6 +237,9 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     if threads.contains(&0) {
         return Err(CliError::new("--threads must be ≥ 1"));
     }
+    if args.wind_substeps_per_update == 0 {
+        return Err(CliError::new("--wind-substeps-per-update must be ≥ 1"));
+    }
     let minimum = Duration::from_secs_f64(args.seconds);
     if args.csv {
         println!(
@@ -251,6 +267,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                     t,
                     minimum,
                     args.parallel_min_particles,
+                    args.wind_substeps_per_update,
                 )?;
                 let mut line = String::new();
                 if args.csv {
