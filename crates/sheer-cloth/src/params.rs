@@ -281,6 +281,12 @@ impl Wind {
             && (self.drag_coefficient != 0.0 || self.lift_coefficient != 0.0)
     }
 
+    /// Whether the aerodynamic forces are re-evaluated at every force evaluation (the default):
+    /// `per_substep` with `substeps_per_update` = 1.
+    pub fn updated_every_substep(&self) -> bool {
+        self.per_substep && self.substeps_per_update == 1
+    }
+
     fn validate(&self) -> Result<(), ParamError> {
         finite_vec("wind.velocity", self.velocity)?;
         non_negative("wind.air_density", self.air_density)?;

@@ -431,8 +431,7 @@ impl Simulation {
         } = self;
         let (positions, velocities) = (&positions[..], &velocities[..]);
         let wind_active = params.wind.is_active() && !triangles.is_empty();
-        let every_call = params.wind.per_substep && params.wind.substeps_per_update == 1;
-        let refresh_wind = wind_active && (*wind_stale || every_call);
+        let refresh_wind = wind_active && (*wind_stale || params.wind.updated_every_substep());
         let air_velocity = wind.air_velocity(time);
         let wind_params = *wind.params();
         let triangle_force = |t: usize| {

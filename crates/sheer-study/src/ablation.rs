@@ -161,8 +161,7 @@ pub fn ablation(
     ];
     // The wind's forces follow the cloth every sub-step; held for a few sub-steps or a whole frame they
     // cost less (the wind is a third to a half of the default flag's CPU time, docs/study.md).
-    let wind = scene.params.wind;
-    if wind.per_substep && wind.substeps_per_update == 1 {
+    if scene.params.wind.updated_every_substep() {
         for interval in [2, 4, 10] {
             variants.push(Variant {
                 part: "wind every sub-step",
