@@ -36,9 +36,9 @@ pub struct BenchSimArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub parallel_min_particles: Option<usize>,
     /// Update the wind's forces every this many sub-steps and hold them in between
-    /// (`wind.substeps_per_update`; 1: every sub-step, the default).
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
-    pub wind_substeps_per_update: u32,
+    /// (`wind.substeps_per_update`; default: the library's, 1, every sub-step).
+    #[arg(long, allow_negative_numbers = true)]
+    pub wind_substeps_per_update: Option<u32>,
     /// Minimum measuring time per case, seconds (at least one frame is always timed).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
@@ -128,7 +128,7 @@ pub fn flag_simulation(
     rows: usize,
     method: Method,
     parallel_min_particles: Option<usize>,
-    wind_substeps_per_update: u32,
+    wind_substeps_per_update: Option<u32>,
 ) -> Result<Simulation, CliError> {
     let spec = GridSpec {
         columns,
@@ -141,7 +141,9 @@ pub fn flag_simulation(
         ..SimParams::default()
     };
     params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
-    params.wind.substeps_per_update = wind_substeps_per_update;
+    if let Some(interval) = wind_substeps_per_update {
+        params.wind.substeps_per_update = interval;
+    }
     if let Some(threshold) = parallel_min_particles {
         params.parallel_min_particles = threshold;
     }
@@ -155,7 +157,7 @@ fn measure(
     threads: usize,
     minimum: Duration,
     parallel_min_particles: Option<usize>,
-    wind_substeps_per_update: u32,
+    wind_substeps_per_update: Option<u32>,
 ) -> Result<Measurement, CliError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -237,7 +239,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     if threads.contains(&0) {
         return Err(CliError::new("--threads must be ≥ 1"));
     }
-    if args.wind_substeps_per_update == 0 {
+    if args.wind_substeps_per_update == Some(0) {
         return Err(CliError::new("--wind-substeps-per-update must be ≥ 1"));
     }
     let minimum = Duration::from_secs_f64(args.seconds);

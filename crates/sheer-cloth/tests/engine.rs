@@ -112,7 +112,7 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
         areal_density: 0.1,
         ..GridSpec::default()
     };
-    let run = |per_substep: bool| {
+    let run = |per_substep: bool, substeps_per_update: u32| {
         let model = ClothModel::grid(&spec)
             .unwrap()
             .with_hoist_pinned()
@@ -120,11 +120,14 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
         let mut params = SimParams::default();
         params.wind.velocity = DVec3::new(12.0, 0.0, 3.0);
         params.wind.per_substep = per_substep;
+        params.wind.substeps_per_update = substeps_per_update;
         let mut sim = Simulation::new(model, params).unwrap();
         (0..600).try_for_each(|_| sim.step(1.0 / 60.0).map(|_| ()))
     };
-    assert!(matches!(run(false), Err(StepError::Diverged { .. })));
-    assert!(run(true).is_ok());
+    assert!(matches!(run(false, 1), Err(StepError::Diverged { .. })));
+    // Every sub-step, and held for 4 of the default method's 20 sub-steps (0.3 per hold).
+    assert!(run(true, 1).is_ok());
+    assert!(run(true, 4).is_ok());
 }
 
 #[test]

@@ -90,6 +90,41 @@ fn with_params(scene: &Scene, change: impl FnOnce(&mut SimParams)) -> Scene {
     changed
 }
 
+/// How often the wind's forces follow the cloth: every sub-step costs most (the wind is a third to a
+/// half of the default flag's CPU time, docs/study.md); held for a few sub-steps or a whole frame it
+/// costs less. Every interval of 1, 2, 4 and 10 sub-steps but the scene's own, and once per frame.
+fn wind_interval_variants(scene: &Scene, method: Method) -> Vec<Variant> {
+    let wind = scene.params.wind;
+    let mut variants = Vec::new();
+    for interval in [1, 2, 4, 10] {
+        if wind.per_substep && wind.substeps_per_update == interval {
+            continue;
+        }
+        variants.push(Variant {
+            part: "wind update interval",
+            setting: if interval == 1 {
+                "every sub-step".into()
+            } else {
+                format!("every {interval} sub-steps")
+            },
+            scene: with_params(scene, |p| {
+                p.wind.per_substep = true;
+                p.wind.substeps_per_update = interval;
+            }),
+            method,
+        });
+    }
+    if wind.per_substep {
+        variants.push(Variant {
+            part: "wind update interval",
+            setting: "once per frame".into(),
+            scene: with_params(scene, |p| p.wind.per_substep = false),
+            method,
+        });
+    }
+    variants
+}
+
 /// The ablation of `scene` (the full model) run by `method` (the base: every row but the integrator
 /// rows uses it), at the reference's sample times and over the scene's coverage window. Every row is
 /// compared with the full model run by `method`.
@@ -159,34 +194,7 @@ pub fn ablation(
             method: Method::SymplecticEuler { substeps: 200 },
         },
     ];
-    // The wind's forces follow the cloth every sub-step; held for a few sub-steps or a whole frame they
-    // cost less (the wind is a third to a half of the default flag's CPU time, docs/study.md).
-    if scene.params.wind.updated_every_substep() {
-        for interval in [2, 4, 10] {
-            variants.push(Variant {
-                part: "wind every sub-step",
-                setting: format!("every {interval} sub-steps"),
-                scene: with_params(scene, |p| p.wind.substeps_per_update = interval),
-                method,
-            });
-        }
-        variants.push(Variant {
-            part: "wind every sub-step",
-            setting: "off (once per frame)".into(),
-            scene: with_params(scene, |p| p.wind.per_substep = false),
-            method,
-        });
-    } else {
-        variants.push(Variant {
-            part: "wind every sub-step",
-            setting: "on".into(),
-            scene: with_params(scene, |p| {
-                p.wind.per_substep = true;
-                p.wind.substeps_per_update = 1;
-            }),
-            method,
-        });
-    }
+    variants.extend(wind_interval_variants(scene, method));
     for &(columns, rows) in grids {
         if (columns, rows) == (scene.grid.columns, scene.grid.rows) {
             continue;
@@ -288,5 +296,42 @@ mod tests {
         let expected = sheer_cloth::ClothModel::grid(&to).unwrap().positions;
         let (rms, max) = position_errors(&resample(&positions, &from, &to), &expected).unwrap();
         assert!(max < 1e-14 && rms < 1e-14, "{rms} {max}");
+    }
+
+    #[test]
+    fn the_wind_rows_leave_out_the_scenes_own_interval() {
+        let scene = Scene::default_flag().unwrap();
+        let settings = |scene: &Scene| -> Vec<(String, bool, u32)> {
+            wind_interval_variants(scene, Method::default())
+                .into_iter()
+                .map(|v| {
+                    let wind = v.scene.params.wind;
+                    (v.setting, wind.per_substep, wind.substeps_per_update)
+                })
+                .collect()
+        };
+        assert!(scene.params.wind.updated_every_substep());
+        assert_eq!(
+            settings(&scene),
+            [
+                ("every 2 sub-steps".to_string(), true, 2),
+                ("every 4 sub-steps".to_string(), true, 4),
+                ("every 10 sub-steps".to_string(), true, 10),
+                ("once per frame".to_string(), false, 1),
+            ]
+        );
+        let every_four = with_params(&scene, |p| p.wind.substeps_per_update = 4);
+        assert_eq!(
+            settings(&every_four),
+            [
+                ("every sub-step".to_string(), true, 1),
+                ("every 2 sub-steps".to_string(), true, 2),
+                ("every 10 sub-steps".to_string(), true, 10),
+                ("once per frame".to_string(), false, 4),
+            ]
+        );
+        let held = with_params(&scene, |p| p.wind.per_substep = false);
+        assert_eq!(settings(&held).len(), 4);
+        assert!(settings(&held).iter().all(|(_, every, _)| *every));
     }
 }
