@@ -7,7 +7,7 @@
 
 // The mesh's vertex buffer as the render pass reads it: 8 floats per vertex (position, normal, uv).
 @group(1) @binding(0) var<storage, read> mesh_vertices: array<f32>;
-// Per vertex: L_m/(Λ·E) (sr⁻¹) on the lit face (3 floats), then on the far face (3 floats); bound as
+// Per vertex: f = L_m/(Λ²·μ0·E) (sr⁻¹) on the lit face (3 floats), then on the far face (3 floats); bound as
 // vertex buffer 1 of the render pass.
 @group(1) @binding(1) var<storage, read_write> vertex_multiple: array<f32>;
 

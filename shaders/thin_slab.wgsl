@@ -221,17 +221,33 @@ fn all_orders_channels(tau: vec3<f32>) -> AllOrdersChannels {
     return AllOrdersChannels(grey, grey, grey);
 }
 
+// Where each channel's Λ falls on the albedo axes of its τ1 nodes.
+struct AllOrdersChannelAlbedos {
+    red: AllOrdersAlbedo,
+    green: AllOrdersAlbedo,
+    blue: AllOrdersAlbedo,
+}
+
+fn all_orders_channel_albedos(nodes: AllOrdersChannels, albedo: vec3<f32>) -> AllOrdersChannelAlbedos {
+    return AllOrdersChannelAlbedos(all_orders_albedo(nodes.red, albedo.r),
+        all_orders_albedo(nodes.green, albedo.g), all_orders_albedo(nodes.blue, albedo.b));
+}
+
+// ln f per channel on the face whose rows start at `face_rows` (`all_orders_face_rows`).
+fn all_orders_log_face(nodes: AllOrdersChannels, albedos: AllOrdersChannelAlbedos, cosines: AllOrdersCosines,
+        face_rows: i32) -> vec3<f32> {
+    return vec3<f32>(all_orders_log_value_at(nodes.red, albedos.red, cosines, face_rows),
+        all_orders_log_value_at(nodes.green, albedos.green, cosines, face_rows),
+        all_orders_log_value_at(nodes.blue, albedos.blue, cosines, face_rows));
+}
+
 // The multiply-scattered radiance per unit albedo and unit irradiance normal to the beam,
 // L_m/Λ = Λ·μ0·e^{ln f} (sr⁻¹), per channel; τ1 grey unless `per_channel_thickness`.
 fn all_orders_multiple_per_albedo(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu: f32,
         eye_on_lit_side: bool) -> vec3<f32> {
-    let cosines = all_orders_cosines(mu0, mu);
     let nodes = all_orders_channels(tau);
-    let face_rows = all_orders_face_rows(eye_on_lit_side);
-    let log_value = vec3<f32>(
-        all_orders_log_value_at(nodes.red, all_orders_albedo(nodes.red, albedo.r), cosines, face_rows),
-        all_orders_log_value_at(nodes.green, all_orders_albedo(nodes.green, albedo.g), cosines, face_rows),
-        all_orders_log_value_at(nodes.blue, all_orders_albedo(nodes.blue, albedo.b), cosines, face_rows));
+    let log_value = all_orders_log_face(nodes, all_orders_channel_albedos(nodes, albedo),
+        all_orders_cosines(mu0, mu), all_orders_face_rows(eye_on_lit_side));
     return albedo * (mu0 * exp(log_value));
 }
 
@@ -248,17 +264,9 @@ fn all_orders_reduced_both_faces(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu
         -> AllOrdersBothFaces {
     let cosines = all_orders_cosines(mu0, mu);
     let nodes = all_orders_channels(tau);
-    let far_rows = all_orders_face_rows(false);
-    let red = all_orders_albedo(nodes.red, albedo.r);
-    let green = all_orders_albedo(nodes.green, albedo.g);
-    let blue = all_orders_albedo(nodes.blue, albedo.b);
-    let lit = vec3<f32>(all_orders_log_value_at(nodes.red, red, cosines, 0),
-        all_orders_log_value_at(nodes.green, green, cosines, 0),
-        all_orders_log_value_at(nodes.blue, blue, cosines, 0));
-    let far = vec3<f32>(all_orders_log_value_at(nodes.red, red, cosines, far_rows),
-        all_orders_log_value_at(nodes.green, green, cosines, far_rows),
-        all_orders_log_value_at(nodes.blue, blue, cosines, far_rows));
-    return AllOrdersBothFaces(exp(lit), exp(far));
+    let albedos = all_orders_channel_albedos(nodes, albedo);
+    return AllOrdersBothFaces(exp(all_orders_log_face(nodes, albedos, cosines, all_orders_face_rows(true))),
+        exp(all_orders_log_face(nodes, albedos, cosines, all_orders_face_rows(false))));
 }
 
 struct SlabValues {
@@ -389,9 +397,9 @@ fn fs_per_fragment(input: FragmentPathVarying) -> SlabOutput {
 
 // ---- per fragment, the multiple part per vertex -------------------------------------------------------
 // The all-orders model with eqs. (4)–(5), α and the irradiance per fragment, as `fs_per_fragment`, but the
-// table's multiple part per unit albedo and unit irradiance, for both faces, computed once per vertex by
+// table's reduced value f = L_m/(Λ²·μ0·E), for both faces, computed once per vertex by
 // `cs_multiple_at_vertex` (multiple_at_vertex.wgsl) and interpolated: the fragment picks the face its own
-// lit-side rule gives and multiplies by its own irradiance and Λ. Multiple scattering varies slowly with
+// lit-side rule gives and multiplies by its own Λ², μ0 and irradiance. Multiple scattering varies slowly with
 // μ0 and μ, so this costs little accuracy (measured in tests/gpu_vs_cpu.rs) and keeps the table's loads
 // out of the fragment shader.
 
@@ -399,7 +407,7 @@ struct MultipleAtVertexInput {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
-    // L_m/(Λ·E) (sr⁻¹) with the eye on the lit side (reflected) and on the far side (transmitted).
+    // f = L_m/(Λ²·μ0·E) (sr⁻¹) with the eye on the lit side (reflected) and on the far side (transmitted).
     @location(3) multiple_lit: vec3<f32>,
     @location(4) multiple_far: vec3<f32>,
 }
