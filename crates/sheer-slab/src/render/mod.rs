@@ -50,6 +50,21 @@ const OUTPUT_DUAL: &str = include_str!("../../../../shaders/slab_output_dual.wgs
 const MODEL_CHECK: &str = include_str!("../../../../shaders/slab_model_check.wgsl");
 const MULTIPLE_AT_VERTEX: &str = include_str!("../../../../shaders/multiple_at_vertex.wgsl");
 
+/// Runs `create` inside a validation error scope, so that a shader or pipeline wgpu rejects becomes
+/// `RenderError::Gpu("{what}: {error}")` instead of an uncaptured error.
+fn validated<T>(
+    device: &wgpu::Device,
+    what: &str,
+    create: impl FnOnce() -> T,
+) -> Result<T, RenderError> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let created = create();
+    match pollster::block_on(scope.pop()) {
+        Some(error) => Err(RenderError::Gpu(format!("{what}: {error}"))),
+        None => Ok(created),
+    }
+}
+
 /// Where the model is evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum EvaluationPath {
@@ -723,25 +738,20 @@ impl HeadlessRenderer {
         if !self.multiple_pipelines.contains_key(&variant) {
             let module = self.module(key.dual)?;
             let constants = key.override_constants();
-            let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let pipeline = self
-                .device
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some("multiple at vertex"),
-                    layout: Some(&self.compute_io_pipeline_layout),
-                    module: &module,
-                    entry_point: Some("cs_multiple_at_vertex"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                });
-            if let Some(error) = pollster::block_on(scope.pop()) {
-                return Err(RenderError::Gpu(format!(
-                    "multiple-at-vertex pipeline: {error}"
-                )));
-            }
+            let pipeline = validated(&self.device, "multiple-at-vertex pipeline", || {
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some("multiple at vertex"),
+                        layout: Some(&self.compute_io_pipeline_layout),
+                        module: &module,
+                        entry_point: Some("cs_multiple_at_vertex"),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            ..Default::default()
+                        },
+                        cache: None,
+                    })
+            })?;
             self.multiple_pipelines.insert(variant, pipeline);
         }
         let (Some((vertices, _)), Some((multiple, _))) =
@@ -883,29 +893,26 @@ impl HeadlessRenderer {
             return Ok(Vec::new());
         }
         let source = format!("{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{MODEL_CHECK}");
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = self
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("slab model check"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
         // With the frame's group 0: the same layout as the per-vertex all-orders pass (group 1 one
         // storage buffer in, one out); without: derived from the entry point.
         let layout = frame_bindings.map(|_| &self.compute_io_pipeline_layout);
-        let pipeline = self
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("slab model check"),
-                layout,
-                module: &module,
-                entry_point: Some(entry_point),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Gpu(format!("model check shader: {error}")));
-        }
+        let pipeline = validated(&self.device, "model check shader", || {
+            let module = self
+                .device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("slab model check"),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                });
+            self.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("slab model check"),
+                    layout,
+                    module: &module,
+                    entry_point: Some(entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        })?;
         let size = std::mem::size_of_val(inputs) as u64;
         let input_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("model inputs"),
@@ -1414,58 +1421,51 @@ impl HeadlessRenderer {
             SHADER_BODY,
             MULTIPLE_AT_VERTEX
         );
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = self
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(if dual {
-                    "thin_slab (dual source)"
-                } else {
-                    "thin_slab"
-                }),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Gpu(format!("shader: {error}")));
-        }
+        let module = validated(&self.device, "shader", || {
+            self.device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(if dual {
+                        "thin_slab (dual source)"
+                    } else {
+                        "thin_slab"
+                    }),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                })
+        })?;
         self.modules.insert(dual, module.clone());
         Ok(module)
     }
 
     fn create_background_pipeline(&mut self) -> Result<wgpu::RenderPipeline, RenderError> {
         let module = self.module(false)?;
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let pipeline = self
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("background"),
-                layout: Some(&self.pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_background"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_background"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: target_wgpu_format(self.target_format),
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Gpu(format!("background pipeline: {error}")));
-        }
-        Ok(pipeline)
+        validated(&self.device, "background pipeline", || {
+            self.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("background"),
+                    layout: Some(&self.pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_background"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: None,
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_background"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: target_wgpu_format(self.target_format),
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
     }
 
     fn pipeline(&mut self, key: PipelineKey) -> Result<(), RenderError> {
@@ -1520,50 +1520,44 @@ impl HeadlessRenderer {
             },
         };
         let constants = key.override_constants();
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let pipeline = self
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(path.name()),
-                layout: Some(&self.pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vertex_entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
+        let pipeline = validated(&self.device, &format!("{} pipeline", path.name()), || {
+            self.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(path.name()),
+                    layout: Some(&self.pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(vertex_entry),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            ..Default::default()
+                        },
+                        buffers: &buffers,
+                    },
+                    // Both faces: the slab is seen from either side.
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: None,
                         ..Default::default()
                     },
-                    buffers: &buffers,
-                },
-                // Both faces: the slab is seen from either side.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fragment_entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: target_wgpu_format(self.target_format),
-                        blend: Some(blend),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Gpu(format!(
-                "{} pipeline: {error}",
-                path.name()
-            )));
-        }
+                    depth_stencil: None,
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(fragment_entry),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            ..Default::default()
+                        },
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: target_wgpu_format(self.target_format),
+                            blend: Some(blend),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })?;
         self.pipelines.insert(key, pipeline);
         Ok(())
     }
