@@ -1129,8 +1129,11 @@ fn assert_table_per_vertex_interpolates(
             .unwrap()
             .0;
         let (mu0, _, _) = lit_side_cosines(sheet.normal, light - point, eye - point);
-        let irradiance = f64::from(shading.light_flux)
-            / (4.0 * std::f64::consts::PI * light.distance_squared(point));
+        let irradiance = point_light_beam_normal_irradiance(
+            f64::from(shading.light_flux),
+            light.distance(point),
+        )
+        .unwrap();
         (
             std::array::from_fn::<f64, 3, _>(|c| {
                 (all[c] - one[c]) / (albedo[c] * mu0 * irradiance)
