@@ -365,15 +365,7 @@ fn the_all_orders_scene_key_renders_what_sheer_slab_computes() {
 /// Display difference (8-bit sRGB levels after the default exposure 0.5, largest over the channels) of
 /// two renders, over the flag's pixels (0 < alpha < 1): (median, 99th percentile).
 fn display_difference(a: &image::Rgba32FImage, b: &image::Rgba32FImage) -> (f64, f64) {
-    let display = |x: f32| {
-        let x = f64::from(x * 0.5).clamp(0.0, 1.0);
-        255.0
-            * if x <= 0.0031308 {
-                12.92 * x
-            } else {
-                1.055 * x.powf(1.0 / 2.4) - 0.055
-            }
-    };
+    let display = |x: f32| 255.0 * f64::from(sheer_slab::render::linear_to_srgb(x * 0.5));
     let mut differences: Vec<f64> = a
         .pixels()
         .zip(b.pixels())

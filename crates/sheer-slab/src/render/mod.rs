@@ -37,7 +37,7 @@ pub use cpu::{
 };
 pub use scene::{
     AllOrdersSampling, Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams,
-    SlabMesh, Texture2d, linear_to_srgb8, srgb8_to_linear,
+    SlabMesh, Texture2d, linear_to_srgb, linear_to_srgb8, srgb8_to_linear,
 };
 
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};

@@ -558,19 +558,24 @@ pub fn srgb8_to_linear(value: u8) -> f32 {
     }
 }
 
-/// The sRGB transfer function (IEC 61966-2-1) of a display value, clamped to [0, 1] (NaN → 0), to 8 bits.
-pub fn linear_to_srgb8(value: f32) -> u8 {
+/// The sRGB transfer function (IEC 61966-2-1) of a display value, clamped to [0, 1] (NaN → 0): the
+/// encoded value in [0, 1], unquantised (for measuring display differences finer than a level).
+pub fn linear_to_srgb(value: f32) -> f32 {
     let v = if value.is_nan() {
         0.0
     } else {
         value.clamp(0.0, 1.0)
     };
-    let encoded = if v <= 0.003_130_8 {
+    if v <= 0.003_130_8 {
         12.92 * v
     } else {
         1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (encoded * 255.0).round() as u8
+    }
+}
+
+/// [`linear_to_srgb`] to 8 bits.
+pub fn linear_to_srgb8(value: f32) -> u8 {
+    (linear_to_srgb(value) * 255.0).round() as u8
 }
 
 #[cfg(test)]
