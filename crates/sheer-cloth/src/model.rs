@@ -75,6 +75,27 @@ impl GridShape {
     pub fn index(&self, row: usize, column: usize) -> usize {
         row * self.columns + column
     }
+
+    /// The grid's triangulation: two triangles per cell, cells row by row, each
+    /// `[top left, bottom left, bottom right]` then `[top left, bottom right, top right]`,
+    /// counter-clockwise seen from +z (rows go down along −y). The simulator's row-wise wind pass relies
+    /// on this order.
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        let (columns, rows) = (self.columns, self.rows);
+        let mut triangles =
+            Vec::with_capacity(2 * columns.saturating_sub(1) * rows.saturating_sub(1));
+        for row in 0..rows.saturating_sub(1) {
+            for column in 0..columns - 1 {
+                let top_left = self.index(row, column) as u32;
+                let top_right = self.index(row, column + 1) as u32;
+                let bottom_left = self.index(row + 1, column) as u32;
+                let bottom_right = self.index(row + 1, column + 1) as u32;
+                triangles.push([top_left, bottom_left, bottom_right]);
+                triangles.push([top_left, bottom_right, top_right]);
+            }
+        }
+        triangles
+    }
 }
 
 /// Particles, triangles, springs and pins: everything the simulator needs besides [`SimParams`](crate::SimParams).
@@ -130,18 +151,7 @@ impl ClothModel {
                 positions.push(origin + DVec3::new(column as f64 * dx, -(row as f64) * dy, 0.0));
             }
         }
-        let mut triangles = Vec::with_capacity(2 * (columns - 1) * (rows - 1));
-        for row in 0..rows - 1 {
-            for column in 0..columns - 1 {
-                let top_left = shape.index(row, column) as u32;
-                let top_right = shape.index(row, column + 1) as u32;
-                let bottom_left = shape.index(row + 1, column) as u32;
-                let bottom_right = shape.index(row + 1, column + 1) as u32;
-                // Counter-clockwise seen from +z (rows go down along −y).
-                triangles.push([top_left, bottom_left, bottom_right]);
-                triangles.push([top_left, bottom_right, top_right]);
-            }
-        }
+        let triangles = shape.triangles();
         let mut springs = Vec::new();
         let mut add = |a: usize, b: usize, kind: SpringKind, positions: &[DVec3]| {
             springs.push(Spring {

@@ -11,10 +11,11 @@ use glam::{DAffine3, DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
+use crate::grid_wind::grid_triangle_forces;
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
 use crate::parallel::{fill, sum};
 use crate::params::{Method, SimParams, SpringParams};
-use crate::wind::{WindField, aerodynamic_force};
+use crate::wind::{WindField, corner_share_of_triangle_force};
 
 /// Error building a [`Simulation`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -102,6 +103,9 @@ pub struct Simulation {
     pub(crate) params: SimParams,
     pub(crate) wind: WindField,
     pub(crate) grid: Option<GridShape>,
+    /// The grid when the triangles are its own triangulation ([`GridShape::triangles`]): the wind pass
+    /// then runs row by row ([`grid_triangle_forces`]).
+    pub(crate) grid_triangulation: Option<GridShape>,
     pub(crate) rest_positions: Vec<DVec3>,
     pub(crate) masses: Vec<f64>,
     /// Zero for pinned particles.
@@ -277,6 +281,9 @@ impl Simulation {
             wind: WindField::new(&params.wind),
             family: family_coefficients(&params),
             params,
+            grid_triangulation: model
+                .grid
+                .filter(|shape| model.triangles == shape.triangles()),
             grid: model.grid,
             masses: model.masses,
             inverse_masses,
@@ -425,6 +432,7 @@ impl Simulation {
             params,
             wind,
             wind_stale,
+            grid_triangulation,
             spring_incidence,
             triangle_incidence,
             ..
@@ -434,17 +442,32 @@ impl Simulation {
         let refresh_wind = wind_active && (*wind_stale || params.wind.updated_every_substep());
         let air_velocity = wind.air_velocity(time);
         let wind_params = *wind.params();
-        let triangle_force = |t: usize| {
-            let [a, b, c] = triangles[t].map(|i| i as usize);
-            let area_normal = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
-            let velocity = (velocities[a] + velocities[b] + velocities[c]) / 3.0;
-            aerodynamic_force(&wind_params, area_normal, velocity, air_velocity) / 3.0
-        };
         let gravity = params.gravity;
         let air_damping = params.air_damping;
         let body_force = |i: usize| masses[i] * (gravity - air_damping * velocities[i]);
         if refresh_wind {
             *wind_stale = false;
+            if let Some(shape) = *grid_triangulation {
+                grid_triangle_forces(
+                    shape,
+                    &wind_params,
+                    air_velocity,
+                    positions,
+                    velocities,
+                    triangle_forces,
+                    parallel,
+                );
+            } else {
+                fill(triangle_forces, parallel, |t| {
+                    let corners = triangles[t].map(|i| i as usize);
+                    corner_share_of_triangle_force(
+                        &wind_params,
+                        corners.map(|i| positions[i]),
+                        corners.map(|i| velocities[i]),
+                        air_velocity,
+                    )
+                });
+            }
         }
         if !parallel {
             // One thread: scatter-add in element order. Each particle receives its terms in the same
@@ -462,11 +485,7 @@ impl Simulation {
                 }
             }
             if wind_active {
-                for (t, tri) in triangles.iter().enumerate() {
-                    if refresh_wind {
-                        triangle_forces[t] = triangle_force(t);
-                    }
-                    let f = triangle_forces[t];
+                for (tri, &f) in triangles.iter().zip(triangle_forces.iter()) {
                     for &v in tri {
                         forces[v as usize] += f;
                     }
@@ -478,9 +497,6 @@ impl Simulation {
             fill(spring_forces, parallel, |s| {
                 spring_force_on_a(&springs[s], family, positions, velocities)
             });
-        }
-        if refresh_wind {
-            fill(triangle_forces, parallel, triangle_force);
         }
         let (spring_forces, triangle_forces) = (&spring_forces[..], &triangle_forces[..]);
         fill(forces, parallel, |i| {

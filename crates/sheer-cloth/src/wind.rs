@@ -115,7 +115,12 @@ impl WindField {
 /// - lift across the flow: `F_L = ½ ρ C_L A |u| (u·n) (n − (n·û) û)`, magnitude `½ ρ C_L A |u|² cos θ sin θ`;
 ///
 /// with `u` the air velocity relative to the triangle, `n` its unit normal and θ the angle between
-/// them. Both terms contain `n` twice, so the force does not depend on the triangle's winding.
+/// them. Both terms contain `n` twice, so the force does not depend on the triangle's winding. A
+/// degenerate triangle or air at rest relative to it feels no force.
+///
+/// Written without early returns (the degenerate cases are selected at the end), so that the row-wise
+/// wind pass over a grid vectorises; the arithmetic of the regular case is the same either way.
+#[inline]
 pub fn aerodynamic_force(
     params: &Wind,
     area_normal: DVec3,
@@ -123,21 +128,33 @@ pub fn aerodynamic_force(
     air_velocity: DVec3,
 ) -> DVec3 {
     let twice_area = area_normal.length();
-    if twice_area == 0.0 {
-        return DVec3::ZERO;
-    }
     let normal = area_normal * (1.0 / twice_area);
     let area = 0.5 * twice_area;
     let relative = air_velocity - triangle_velocity;
     let speed = relative.length();
-    if speed == 0.0 {
-        return DVec3::ZERO;
-    }
     let normal_component = relative.dot(normal);
     let pressure = 0.5 * params.air_density * area * speed * normal_component;
     let drag = params.drag_coefficient * pressure * normal;
     let flow = relative * (1.0 / speed);
     let across_flow = normal - normal.dot(flow) * flow;
     let lift = params.lift_coefficient * pressure * across_flow;
-    drag + lift
+    if twice_area == 0.0 || speed == 0.0 {
+        DVec3::ZERO
+    } else {
+        drag + lift
+    }
+}
+
+/// The share of triangle `[a, b, c]`'s aerodynamic force (N) that each of its corners receives: a third
+/// of [`aerodynamic_force`] on the triangle moving with its corners' mean velocity.
+#[inline(always)]
+pub(crate) fn corner_share_of_triangle_force(
+    params: &Wind,
+    [a, b, c]: [DVec3; 3],
+    [velocity_a, velocity_b, velocity_c]: [DVec3; 3],
+    air_velocity: DVec3,
+) -> DVec3 {
+    let area_normal = (b - a).cross(c - a);
+    let velocity = (velocity_a + velocity_b + velocity_c) / 3.0;
+    aerodynamic_force(params, area_normal, velocity, air_velocity) / 3.0
 }
