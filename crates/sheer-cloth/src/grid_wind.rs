@@ -9,8 +9,9 @@
 //! vector division and square root round like their scalar forms, and Rust never fuses a multiply and an
 //! add on its own).
 //!
-//! The loop is compiled once per instruction set and picked at run time (x86-64: AVX-512, AVX2, or the
-//! baseline SSE2), so one binary runs on any x86-64 machine.
+//! The loop is compiled once per instruction set and picked at run time ([`by_cpu!`]). The shares are then
+//! added to the particles row by row too ([`add_grid_triangle_forces`]), each particle taking its six
+//! triangles in ascending order, as the general path's scatter does.
 
 use std::ops::Range;
 
@@ -19,6 +20,7 @@ use rayon::prelude::*;
 
 use crate::model::GridShape;
 use crate::params::Wind;
+use crate::vectorise::by_cpu;
 use crate::wind::corner_share_of_triangle_force;
 
 /// Writes each triangle's corner share of its aerodynamic force (N) into `out`, indexed like
@@ -37,7 +39,7 @@ pub(crate) fn grid_triangle_forces(
     assert_eq!(out.len(), cells_per_row * (shape.rows - 1));
     let rows = |first_row: usize, out: &mut [[DVec3; 2]]| {
         let rows = first_row..first_row + out.len() / cells_per_row;
-        cell_rows_dispatch(
+        cell_rows(
             shape.columns,
             wind,
             air_velocity,
@@ -58,148 +60,142 @@ pub(crate) fn grid_triangle_forces(
     }
 }
 
-/// Runs [`cell_rows`] compiled for the widest vector instructions the CPU has.
-fn cell_rows_dispatch(
-    columns: usize,
-    wind: &Wind,
-    air_velocity: DVec3,
-    positions: &[DVec3],
-    velocities: &[DVec3],
-    rows: Range<usize>,
-    out: &mut [[DVec3; 2]],
-) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked just above.
-            return unsafe {
-                cell_rows_avx512(
-                    columns,
-                    wind,
-                    air_velocity,
-                    positions,
-                    velocities,
-                    rows,
-                    out,
-                )
-            };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe {
-                cell_rows_avx2(
-                    columns,
-                    wind,
-                    air_velocity,
-                    positions,
-                    velocities,
-                    rows,
-                    out,
-                )
-            };
+by_cpu! {
+    /// The corner shares of the triangles of the cells in `rows` (rows of cells, not of particles), into
+    /// `out` (two triangles per cell, cells row by row).
+    fn cell_rows(
+        columns: usize,
+        wind: &Wind,
+        air_velocity: DVec3,
+        positions: &[DVec3],
+        velocities: &[DVec3],
+        rows: Range<usize>,
+        out: &mut [[DVec3; 2]],
+    ) {
+        let cells = columns - 1;
+        for (row, out) in rows.zip(out.chunks_exact_mut(cells)) {
+            let top = row * columns;
+            let bottom = top + columns;
+            // Exact-length slices let the compiler drop the bounds checks inside the loop.
+            let (top_x, bottom_x) = (
+                &positions[top..top + columns],
+                &positions[bottom..bottom + columns],
+            );
+            let (top_v, bottom_v) = (
+                &velocities[top..top + columns],
+                &velocities[bottom..bottom + columns],
+            );
+            // An index loop over exact-length slices: the form the vectoriser recognises (an iterator over
+            // `out` alone leaves bounds checks on `left + 1` and measured 30 % slower overall).
+            #[allow(clippy::needless_range_loop)]
+            for left in 0..cells {
+                let right = left + 1;
+                // Same corners and order as `GridShape::triangles`.
+                out[left] = [
+                    corner_share_of_triangle_force(
+                        wind,
+                        [top_x[left], bottom_x[left], bottom_x[right]],
+                        [top_v[left], bottom_v[left], bottom_v[right]],
+                        air_velocity,
+                    ),
+                    corner_share_of_triangle_force(
+                        wind,
+                        [top_x[left], bottom_x[right], top_x[right]],
+                        [top_v[left], bottom_v[right], top_v[right]],
+                        air_velocity,
+                    ),
+                ];
+            }
         }
     }
-    cell_rows(
-        columns,
-        wind,
-        air_velocity,
-        positions,
-        velocities,
-        rows,
-        out,
-    )
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn cell_rows_avx512(
-    columns: usize,
-    wind: &Wind,
-    air_velocity: DVec3,
-    positions: &[DVec3],
-    velocities: &[DVec3],
-    rows: Range<usize>,
-    out: &mut [[DVec3; 2]],
+/// Adds each triangle's corner share in `shares` (indexed like [`GridShape::triangles`]) to its three
+/// corners' entries of `forces`. Each particle takes its (up to six) triangles in ascending triangle
+/// order, the order in which the general path scatters them, so the sums are the same bits.
+pub(crate) fn add_grid_triangle_forces(
+    shape: GridShape,
+    shares: &[DVec3],
+    forces: &mut [DVec3],
+    parallel: bool,
 ) {
-    cell_rows(
-        columns,
-        wind,
-        air_velocity,
-        positions,
-        velocities,
-        rows,
-        out,
-    )
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn cell_rows_avx2(
-    columns: usize,
-    wind: &Wind,
-    air_velocity: DVec3,
-    positions: &[DVec3],
-    velocities: &[DVec3],
-    rows: Range<usize>,
-    out: &mut [[DVec3; 2]],
-) {
-    cell_rows(
-        columns,
-        wind,
-        air_velocity,
-        positions,
-        velocities,
-        rows,
-        out,
-    )
-}
-
-/// The corner shares of the triangles of the cells in `rows` (rows of cells, not of particles), into
-/// `out` (two triangles per cell, cells row by row).
-#[inline(always)]
-fn cell_rows(
-    columns: usize,
-    wind: &Wind,
-    air_velocity: DVec3,
-    positions: &[DVec3],
-    velocities: &[DVec3],
-    rows: Range<usize>,
-    out: &mut [[DVec3; 2]],
-) {
-    let cells = columns - 1;
-    for (row, out) in rows.zip(out.chunks_exact_mut(cells)) {
-        let top = row * columns;
-        let bottom = top + columns;
-        // Exact-length slices let the compiler drop the bounds checks inside the loop.
-        let (top_x, bottom_x) = (
-            &positions[top..top + columns],
-            &positions[bottom..bottom + columns],
-        );
-        let (top_v, bottom_v) = (
-            &velocities[top..top + columns],
-            &velocities[bottom..bottom + columns],
-        );
-        // An index loop over exact-length slices: the form the vectoriser recognises (an iterator over
-        // `out` alone leaves bounds checks on `left + 1` and measured 30 % slower overall).
-        #[allow(clippy::needless_range_loop)]
-        for left in 0..cells {
-            let right = left + 1;
-            // Same corners and order as `GridShape::triangles`.
-            out[left] = [
-                corner_share_of_triangle_force(
-                    wind,
-                    [top_x[left], bottom_x[left], bottom_x[right]],
-                    [top_v[left], bottom_v[left], bottom_v[right]],
-                    air_velocity,
-                ),
-                corner_share_of_triangle_force(
-                    wind,
-                    [top_x[left], bottom_x[right], top_x[right]],
-                    [top_v[left], bottom_v[right], top_v[right]],
-                    air_velocity,
-                ),
-            ];
+    let columns = shape.columns;
+    let (cells, _) = shares.as_chunks::<2>();
+    let cells_per_row = columns - 1;
+    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
+    assert_eq!(forces.len(), columns * shape.rows);
+    let row = |row: usize, forces: &mut [DVec3]| {
+        // The cells above and below particle row `row`.
+        let above = row
+            .checked_sub(1)
+            .map(|r| &cells[r * cells_per_row..(r + 1) * cells_per_row]);
+        let below =
+            (row + 1 < shape.rows).then(|| &cells[row * cells_per_row..(row + 1) * cells_per_row]);
+        add_to_particle_row(above, below, forces);
+    };
+    if parallel {
+        forces
+            .par_chunks_mut(columns)
+            .enumerate()
+            .with_min_len(8)
+            .for_each(|(r, forces)| row(r, forces));
+    } else {
+        for (r, forces) in forces.chunks_exact_mut(columns).enumerate() {
+            row(r, forces);
         }
+    }
+}
+
+/// The triangles of cell row `above` (if any) then `below` (if any) that touch particle `column`, in
+/// ascending order: the cell above-left's two, the cell above's first, the cell below-left's second, the
+/// cell below's two (see [`GridShape::triangles`] for which corners each triangle has).
+#[inline(always)]
+fn add_at_particle(
+    force: &mut DVec3,
+    column: usize,
+    above: Option<&[[DVec3; 2]]>,
+    below: Option<&[[DVec3; 2]]>,
+    has_left: bool,
+    has_right: bool,
+) {
+    if let Some(above) = above {
+        if has_left {
+            *force += above[column - 1][0];
+            *force += above[column - 1][1];
+        }
+        if has_right {
+            *force += above[column][0];
+        }
+    }
+    if let Some(below) = below {
+        if has_left {
+            *force += below[column - 1][1];
+        }
+        if has_right {
+            *force += below[column][0];
+            *force += below[column][1];
+        }
+    }
+}
+
+by_cpu! {
+    /// One particle row of [`add_grid_triangle_forces`]: the end particles apart, so that the loop over
+    /// the interior has no conditions and vectorises.
+    fn add_to_particle_row(
+        above: Option<&[[DVec3; 2]]>,
+        below: Option<&[[DVec3; 2]]>,
+        forces: &mut [DVec3],
+    ) {
+        let last = forces.len() - 1;
+        // Rows of `last` cells: with that length known, the interior loop needs no bounds checks.
+        let (above, below) = (above.map(|a| &a[..last]), below.map(|b| &b[..last]));
+        add_at_particle(&mut forces[0], 0, above, below, false, true);
+        // An index loop: the neighbours' cells are indexed around `column` (see `cell_rows`).
+        #[allow(clippy::needless_range_loop)]
+        for column in 1..last {
+            add_at_particle(&mut forces[column], column, above, below, true, true);
+        }
+        add_at_particle(&mut forces[last], last, above, below, true, false);
     }
 }
 

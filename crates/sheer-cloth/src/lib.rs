@@ -30,6 +30,7 @@ mod parallel;
 mod params;
 mod position_based;
 mod sim;
+mod vectorise;
 pub mod wind;
 
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use crate::parallel::{DisjointSlice, fill};
 use crate::sim::{Simulation, family_index};
+use crate::vectorise::by_cpu;
 
 /// One distance constraint as the solver streams it, in colour order. 32 bytes: per-family constants
 /// live in a 3-entry table and inverse masses in the particle array, so that the constraints of large
@@ -51,27 +52,34 @@ impl Simulation {
                 inverse_masses,
                 ..
             } = self;
-            let update = |i: usize, x: &mut DVec3, v: &mut DVec3, previous: &mut DVec3| {
-                *v += h * inverse_masses[i] * forces[i];
-                *previous = *x;
-                *x += h * *v;
-            };
+            let (inverse_masses, forces) = (&inverse_masses[..], &forces[..]);
             if parallel {
+                const CHUNK: usize = 4096;
                 positions
-                    .par_iter_mut()
-                    .zip(velocities.par_iter_mut())
-                    .zip(previous_positions.par_iter_mut())
+                    .par_chunks_mut(CHUNK)
+                    .zip(velocities.par_chunks_mut(CHUNK))
+                    .zip(previous_positions.par_chunks_mut(CHUNK))
                     .enumerate()
-                    .for_each(|(i, ((x, v), p))| update(i, x, v, p));
+                    .for_each(|(chunk, ((x, v), previous))| {
+                        let range = chunk * CHUNK..chunk * CHUNK + x.len();
+                        predict_positions(
+                            h,
+                            &inverse_masses[range.clone()],
+                            &forces[range],
+                            x,
+                            v,
+                            previous,
+                        );
+                    });
             } else {
-                for (i, ((x, v), p)) in positions
-                    .iter_mut()
-                    .zip(velocities.iter_mut())
-                    .zip(previous_positions.iter_mut())
-                    .enumerate()
-                {
-                    update(i, x, v, p);
-                }
+                predict_positions(
+                    h,
+                    inverse_masses,
+                    forces,
+                    positions,
+                    velocities,
+                    previous_positions,
+                );
             }
         }
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
@@ -252,18 +260,56 @@ impl Simulation {
             ..
         } = self;
         let inverse_h = 1.0 / h;
-        let previous = &previous_positions[..];
         if parallel {
+            const CHUNK: usize = 4096;
             velocities
-                .par_iter_mut()
-                .zip(positions.par_iter())
-                .enumerate()
-                .for_each(|(i, (v, x))| *v = (*x - previous[i]) * inverse_h);
+                .par_chunks_mut(CHUNK)
+                .zip(positions.par_chunks(CHUNK))
+                .zip(previous_positions.par_chunks(CHUNK))
+                .for_each(|((v, x), previous)| {
+                    velocities_from_positions(inverse_h, x, previous, v)
+                });
         } else {
-            for (i, (v, x)) in velocities.iter_mut().zip(positions.iter()).enumerate() {
-                *v = (*x - previous[i]) * inverse_h;
-            }
+            velocities_from_positions(inverse_h, positions, previous_positions, velocities);
         }
         self.cached_forces_valid = false;
+    }
+}
+
+by_cpu! {
+    /// Symplectic Euler prediction over sub-step `h` (s): `v += h w f`, then `x += h v`, keeping the start
+    /// positions in `previous` (Macklin et al. 2016, Algorithm 1, lines 3–4).
+    fn predict_positions(
+        h: f64,
+        inverse_masses: &[f64],
+        forces: &[DVec3],
+        positions: &mut [DVec3],
+        velocities: &mut [DVec3],
+        previous: &mut [DVec3],
+    ) {
+        previous.copy_from_slice(positions);
+        for ((x, v), (&w, &f)) in positions
+            .iter_mut()
+            .zip(velocities.iter_mut())
+            .zip(inverse_masses.iter().zip(forces))
+        {
+            *v += h * w * f;
+            *x += h * *v;
+        }
+    }
+}
+
+by_cpu! {
+    /// Velocities from the position change over the sub-step, `v = (x − x_previous)/h` (Macklin et al.
+    /// 2016, Algorithm 1, line 16), with `inverse_h = 1/h` in 1/s.
+    fn velocities_from_positions(
+        inverse_h: f64,
+        positions: &[DVec3],
+        previous: &[DVec3],
+        velocities: &mut [DVec3],
+    ) {
+        for (v, (&x, &start)) in velocities.iter_mut().zip(positions.iter().zip(previous)) {
+            *v = (x - start) * inverse_h;
+        }
     }
 }

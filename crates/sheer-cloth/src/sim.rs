@@ -11,7 +11,7 @@ use glam::{DAffine3, DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
-use crate::grid_wind::grid_triangle_forces;
+use crate::grid_wind::{add_grid_triangle_forces, grid_triangle_forces};
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
 use crate::parallel::{fill, sum};
 use crate::params::{Method, SimParams, SpringParams};
@@ -485,9 +485,13 @@ impl Simulation {
                 }
             }
             if wind_active {
-                for (tri, &f) in triangles.iter().zip(triangle_forces.iter()) {
-                    for &v in tri {
-                        forces[v as usize] += f;
+                if let Some(shape) = *grid_triangulation {
+                    add_grid_triangle_forces(shape, triangle_forces, forces, false);
+                } else {
+                    for (tri, &f) in triangles.iter().zip(triangle_forces.iter()) {
+                        for &v in tri {
+                            forces[v as usize] += f;
+                        }
                     }
                 }
             }
@@ -499,6 +503,7 @@ impl Simulation {
             });
         }
         let (spring_forces, triangle_forces) = (&spring_forces[..], &triangle_forces[..]);
+        let gather_triangles = wind_active && grid_triangulation.is_none();
         fill(forces, parallel, |i| {
             let mut force = body_force(i);
             if with_springs {
@@ -507,13 +512,16 @@ impl Simulation {
                     force += if item & 1 == 0 { f } else { -f };
                 }
             }
-            if wind_active {
+            if gather_triangles {
                 for &t in triangle_incidence.of(i) {
                     force += triangle_forces[t as usize];
                 }
             }
             force
         });
+        if let (true, Some(shape)) = (wind_active, *grid_triangulation) {
+            add_grid_triangle_forces(shape, triangle_forces, forces, parallel);
+        }
     }
 
     /// Checks the state after a step; `None` when it is sound.
