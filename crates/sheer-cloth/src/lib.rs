@@ -23,6 +23,7 @@
 //! Units: metres, kilograms, seconds, newtons. Results are bit-identical whatever rayon's thread count.
 
 mod error;
+mod grid_constraints;
 mod grid_wind;
 mod mass_spring;
 mod model;

@@ -76,6 +76,38 @@ impl GridShape {
         row * self.columns + column
     }
 
+    /// The grid's springs as `(a, b, kind)`, particle by particle in row order: stretch to the right and
+    /// down, the two shear diagonals of the cell below-right (`a` top left or top right), and bending to
+    /// the particle two to the right and two down.
+    pub fn spring_pairs(&self) -> Vec<(usize, usize, SpringKind)> {
+        let (columns, rows) = (self.columns, self.rows);
+        let mut pairs = Vec::new();
+        for row in 0..rows {
+            for column in 0..columns {
+                let here = self.index(row, column);
+                if column + 1 < columns {
+                    pairs.push((here, self.index(row, column + 1), SpringKind::Stretch));
+                }
+                if row + 1 < rows {
+                    pairs.push((here, self.index(row + 1, column), SpringKind::Stretch));
+                }
+                if column + 1 < columns && row + 1 < rows {
+                    let diagonal = self.index(row + 1, column + 1);
+                    pairs.push((here, diagonal, SpringKind::Shear));
+                    let anti_diagonal = (self.index(row, column + 1), self.index(row + 1, column));
+                    pairs.push((anti_diagonal.0, anti_diagonal.1, SpringKind::Shear));
+                }
+                if column + 2 < columns {
+                    pairs.push((here, self.index(row, column + 2), SpringKind::Bend));
+                }
+                if row + 2 < rows {
+                    pairs.push((here, self.index(row + 2, column), SpringKind::Bend));
+                }
+            }
+        }
+        pairs
+    }
+
     /// The grid's triangulation: two triangles per cell, cells row by row, each
     /// `[top left, bottom left, bottom right]` then `[top left, bottom right, top right]`,
     /// counter-clockwise seen from +z (rows go down along −y). The simulator's row-wise wind pass relies
@@ -152,66 +184,16 @@ impl ClothModel {
             }
         }
         let triangles = shape.triangles();
-        let mut springs = Vec::new();
-        let mut add = |a: usize, b: usize, kind: SpringKind, positions: &[DVec3]| {
-            springs.push(Spring {
+        let springs = shape
+            .spring_pairs()
+            .into_iter()
+            .map(|(a, b, kind)| Spring {
                 a: a as u32,
                 b: b as u32,
                 kind,
                 rest_length: positions[a].distance(positions[b]),
-            });
-        };
-        for row in 0..rows {
-            for column in 0..columns {
-                let here = shape.index(row, column);
-                if column + 1 < columns {
-                    add(
-                        here,
-                        shape.index(row, column + 1),
-                        SpringKind::Stretch,
-                        &positions,
-                    );
-                }
-                if row + 1 < rows {
-                    add(
-                        here,
-                        shape.index(row + 1, column),
-                        SpringKind::Stretch,
-                        &positions,
-                    );
-                }
-                if column + 1 < columns && row + 1 < rows {
-                    add(
-                        here,
-                        shape.index(row + 1, column + 1),
-                        SpringKind::Shear,
-                        &positions,
-                    );
-                    add(
-                        shape.index(row, column + 1),
-                        shape.index(row + 1, column),
-                        SpringKind::Shear,
-                        &positions,
-                    );
-                }
-                if column + 2 < columns {
-                    add(
-                        here,
-                        shape.index(row, column + 2),
-                        SpringKind::Bend,
-                        &positions,
-                    );
-                }
-                if row + 2 < rows {
-                    add(
-                        here,
-                        shape.index(row + 2, column),
-                        SpringKind::Bend,
-                        &positions,
-                    );
-                }
-            }
-        }
+            })
+            .collect();
         let masses = lumped_masses(&positions, &triangles, areal_density)?;
         Ok(ClothModel {
             pinned: vec![false; positions.len()],

@@ -80,6 +80,19 @@ impl<'a, T: Copy> DisjointSlice<'a, T> {
         unsafe { *self.ptr.add(i) }
     }
 
+    /// The elements in `range` as a mutable slice.
+    ///
+    /// # Safety
+    /// No other thread may touch an index of `range` while the slice lives, and no other live slice or
+    /// `get`/`set` of this thread may overlap it.
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    pub(crate) unsafe fn slice_mut(&self, range: std::ops::Range<usize>) -> &mut [T] {
+        assert!(range.start <= range.end && range.end <= self.len);
+        // SAFETY: in bounds (checked above); exclusive by the caller's contract.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+    }
+
     /// # Safety
     /// No other thread may read or write index `i` concurrently.
     #[inline]

@@ -9,6 +9,10 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
+use crate::grid_constraints::{
+    FamilyConstants, GridConstraints, Layout, Strip, project, project_along, project_apart,
+};
+use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill};
 use crate::sim::{Simulation, family_index};
 use crate::vectorise::by_cpu;
@@ -82,12 +86,6 @@ impl Simulation {
                 );
             }
         }
-        // With one iteration every multiplier is used once, right after being reset: it is always 0 when
-        // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
-        let keep_multipliers = iterations > 1;
-        if keep_multipliers {
-            self.lambdas.fill(0.0);
-        }
         // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
         // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
         let stretch_stiffness = self.family[0].0;
@@ -125,132 +123,56 @@ impl Simulation {
                 springs,
                 inverse_masses,
                 packed,
+                grid_constraints,
                 ..
             } = self;
-            packed.resize(springs.len(), PackedConstraint::default());
-            fill(packed, parallel, |c| {
-                let sp = &springs[c];
-                let family = family_index(sp.kind);
-                let (scale, scaled_compliance, gamma) = constants[family];
-                let (wa, wb) = (inverse_masses[sp.a as usize], inverse_masses[sp.b as usize]);
-                let w = wa + wb;
-                let inverse_denominator = if scale == 0.0 || w == 0.0 {
+            let inverse_denominator = |spring: &Spring| {
+                let (scale, scaled_compliance, gamma) = constants[family_index(spring.kind)];
+                let w = inverse_masses[spring.a as usize] + inverse_masses[spring.b as usize];
+                if scale == 0.0 || w == 0.0 {
                     0.0
                 } else if is_pbd {
                     scale / w
                 } else {
                     1.0 / ((1.0 + gamma) * w + scaled_compliance)
-                };
-                PackedConstraint {
-                    a: sp.a,
-                    b: sp.b,
-                    rest_length: sp.rest_length,
-                    inverse_denominator,
-                    family: family as u8,
                 }
-            });
+            };
+            if let Some(grid) = grid_constraints {
+                let GridConstraints {
+                    springs,
+                    inverse_denominators,
+                    ..
+                } = grid;
+                fill(inverse_denominators, parallel, |c| {
+                    inverse_denominator(&springs[c])
+                });
+            } else {
+                packed.resize(springs.len(), PackedConstraint::default());
+                fill(packed, parallel, |c| {
+                    let spring = &springs[c];
+                    PackedConstraint {
+                        a: spring.a,
+                        b: spring.b,
+                        rest_length: spring.rest_length,
+                        inverse_denominator: inverse_denominator(spring),
+                        family: family_index(spring.kind) as u8,
+                    }
+                });
+            }
             self.denominator_key = Some(key);
         }
-        let Simulation {
-            positions,
-            previous_positions,
-            colours,
-            uncoloured,
-            lambdas,
-            packed,
-            tethers,
-            pinned_indices,
-            params,
-            inverse_masses,
-            ..
-        } = self;
-        let inverse_masses = &inverse_masses[..];
-        // (α̃, γ) per family, indexed by `PackedConstraint::family`.
-        let family_constants: [(f64, f64); 3] =
-            std::array::from_fn(|f| (constants[f].1, constants[f].2));
-        let long_range_attachments = params.long_range_attachments && !pinned_indices.is_empty();
-        let positions = DisjointSlice::new(positions);
-        let lambdas = DisjointSlice::new(lambdas);
-        let previous = &previous_positions[..];
-        let packed = &packed[..];
-        let solve = |c: usize| {
-            let k = &packed[c];
-            if k.inverse_denominator == 0.0 {
-                return; // switched-off family or both ends pinned
-            }
-            let (a, b) = (k.a as usize, k.b as usize);
-            // SAFETY: the colouring puts no two springs sharing a particle in one batch, and each spring
-            // owns its multiplier, so no index is touched by two threads at once.
-            let (xa, xb) = unsafe { (positions.get(a), positions.get(b)) };
-            let delta = xa - xb;
-            let length = delta.length();
-            if length == 0.0 {
-                return; // coincident ends: no gradient direction
-            }
-            let gradient = delta * (1.0 / length);
-            let constraint = length - k.rest_length;
-            let correction = if is_pbd {
-                -constraint * k.inverse_denominator
-            } else {
-                let rate = gradient.dot((xa - previous[a]) - (xb - previous[b]));
-                let (scaled_compliance, gamma) = family_constants[k.family as usize];
-                // SAFETY: see above.
-                let lambda = if keep_multipliers {
-                    unsafe { lambdas.get(c) }
-                } else {
-                    0.0
-                };
-                let delta_lambda = (-constraint - scaled_compliance * lambda - gamma * rate)
-                    * k.inverse_denominator;
-                if keep_multipliers {
-                    unsafe { lambdas.set(c, lambda + delta_lambda) };
-                }
-                delta_lambda
-            };
-            let step = correction * gradient;
-            // SAFETY: see above.
-            unsafe {
-                positions.set(a, xa + inverse_masses[a] * step);
-                positions.set(b, xb - inverse_masses[b] * step);
-            }
-        };
-        for _ in 0..iterations {
-            for range in colours.iter() {
-                if parallel && range.len() >= MIN_PARALLEL_BATCH {
-                    range
-                        .clone()
-                        .into_par_iter()
-                        .with_min_len(256)
-                        .for_each(solve);
-                } else {
-                    range.clone().for_each(solve);
-                }
-            }
-            uncoloured.clone().for_each(solve);
-            if long_range_attachments {
-                // Each tether moves only its own free particle towards a pinned one: independent.
-                let tether = |i: usize| {
-                    if let Some((k, rest)) = tethers[i] {
-                        let anchor_index = pinned_indices[k as usize] as usize;
-                        // SAFETY: tether i writes only particle i, and reads a pinned particle, which
-                        // no tether writes.
-                        let (x, anchor) =
-                            unsafe { (positions.get(i), positions.get(anchor_index)) };
-                        let offset = x - anchor;
-                        let distance = offset.length();
-                        if distance > rest {
-                            unsafe { positions.set(i, anchor + offset * (rest / distance)) };
-                        }
-                    }
-                };
-                if parallel {
-                    (0..tethers.len())
-                        .into_par_iter()
-                        .with_min_len(1024)
-                        .for_each(tether);
-                } else {
-                    (0..tethers.len()).for_each(tether);
-                }
+        let family_constants: [FamilyConstants; 3] = std::array::from_fn(|f| FamilyConstants {
+            scaled_compliance: constants[f].1,
+            gamma: constants[f].2,
+        });
+        // With one iteration every multiplier is used once, right after being reset: it is always 0 when
+        // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
+        let multipliers = iterations > 1 && !is_pbd;
+        match (is_pbd, multipliers) {
+            (true, _) => self.project_constraints::<true, false>(iterations, family_constants),
+            (false, true) => self.project_constraints::<false, true>(iterations, family_constants),
+            (false, false) => {
+                self.project_constraints::<false, false>(iterations, family_constants)
             }
         }
         let Simulation {
@@ -310,6 +232,206 @@ by_cpu! {
     ) {
         for (v, (&x, &start)) in velocities.iter_mut().zip(positions.iter().zip(previous)) {
             *v = (x - start) * inverse_h;
+        }
+    }
+}
+
+impl Simulation {
+    /// `iterations` Gauss–Seidel sweeps over the constraints, batch by batch, each followed by the
+    /// long-range attachments. Grids go strip by strip ([`GridConstraints`]), other meshes constraint by
+    /// constraint in their colour batches; both project with [`project`].
+    fn project_constraints<const PBD: bool, const MULTIPLIERS: bool>(
+        &mut self,
+        iterations: u32,
+        family: [FamilyConstants; 3],
+    ) {
+        let parallel = self.parallel();
+        let Simulation {
+            positions,
+            previous_positions,
+            colours,
+            uncoloured,
+            lambdas,
+            packed,
+            tether_anchors,
+            tether_lengths,
+            tether_anchor_positions: anchors,
+            pinned_indices,
+            params,
+            inverse_masses,
+            grid_constraints,
+            ..
+        } = self;
+        let particle_count = positions.len();
+        let inverse_masses = &inverse_masses[..];
+        let long_range_attachments = params.long_range_attachments && !pinned_indices.is_empty();
+        if MULTIPLIERS {
+            lambdas.fill(0.0);
+            if let Some(grid) = grid_constraints.as_mut() {
+                grid.lambdas.fill(0.0);
+            }
+        }
+        let previous = &previous_positions[..];
+        let positions = DisjointSlice::new(positions);
+        let lambdas = DisjointSlice::new(lambdas);
+        let packed = &packed[..];
+        let solve = |c: usize| {
+            let k = &packed[c];
+            let (a, b) = (k.a as usize, k.b as usize);
+            // SAFETY: the colouring puts no two springs sharing a particle in one batch, and each spring
+            // owns its multiplier, so no index is touched by two threads at once.
+            unsafe {
+                let (mut x_a, mut x_b) = (positions.get(a), positions.get(b));
+                let mut lambda = if MULTIPLIERS { lambdas.get(c) } else { 0.0 };
+                project::<PBD, MULTIPLIERS>(
+                    &mut x_a,
+                    &mut x_b,
+                    previous[a],
+                    previous[b],
+                    inverse_masses[a],
+                    inverse_masses[b],
+                    k.rest_length,
+                    k.inverse_denominator,
+                    &mut lambda,
+                    family[k.family as usize],
+                );
+                positions.set(a, x_a);
+                positions.set(b, x_b);
+                if MULTIPLIERS {
+                    lambdas.set(c, lambda);
+                }
+            }
+        };
+        for _ in 0..iterations {
+            if let Some(grid) = grid_constraints.as_mut() {
+                let GridConstraints {
+                    springs,
+                    strips,
+                    batches,
+                    rest_lengths,
+                    inverse_denominators,
+                    lambdas,
+                } = grid;
+                let lambdas = DisjointSlice::new(lambdas);
+                let project_strip = |strip: &Strip| {
+                    let family = family[family_index(springs[strip.first].kind)];
+                    let constraints = strip.first..strip.first + strip.count;
+                    let (rest, inverse_denominators) = (
+                        &rest_lengths[constraints.clone()],
+                        &inverse_denominators[constraints.clone()],
+                    );
+                    // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
+                    // `grid_strips_*` tests), each strip owns its constraints' multipliers, and one
+                    // strip's two ranges do not overlap (`Layout::Apart` has b ≥ a + count).
+                    unsafe {
+                        let lambdas = lambdas.slice_mut(constraints);
+                        let [first, second] = strip.particle_ranges();
+                        match strip.layout {
+                            Layout::Apart { .. } => {
+                                project_apart::<PBD, MULTIPLIERS>(
+                                    positions.slice_mut(first.clone()),
+                                    positions.slice_mut(second.clone()),
+                                    &previous[first.clone()],
+                                    &previous[second.clone()],
+                                    &inverse_masses[first],
+                                    &inverse_masses[second],
+                                    rest,
+                                    inverse_denominators,
+                                    lambdas,
+                                    family,
+                                );
+                            }
+                            Layout::Along { half } => {
+                                let x = positions.slice_mut(first.clone());
+                                let (previous, w) =
+                                    (&previous[first.clone()], &inverse_masses[first]);
+                                if half == 1 {
+                                    project_along::<PBD, MULTIPLIERS, 1, 2>(
+                                        x.as_chunks_mut().0,
+                                        previous.as_chunks().0,
+                                        w.as_chunks().0,
+                                        rest.as_chunks().0,
+                                        inverse_denominators.as_chunks().0,
+                                        lambdas.as_chunks_mut().0,
+                                        family,
+                                    );
+                                } else {
+                                    project_along::<PBD, MULTIPLIERS, 2, 4>(
+                                        x.as_chunks_mut().0,
+                                        previous.as_chunks().0,
+                                        w.as_chunks().0,
+                                        rest.as_chunks().0,
+                                        inverse_denominators.as_chunks().0,
+                                        lambdas.as_chunks_mut().0,
+                                        family,
+                                    );
+                                }
+                            }
+                        }
+                    }
+                };
+                for batch in batches.iter() {
+                    let strips = &strips[batch.clone()];
+                    if parallel {
+                        strips.par_iter().with_min_len(4).for_each(project_strip);
+                    } else {
+                        strips.iter().for_each(project_strip);
+                    }
+                }
+            } else {
+                for range in colours.iter() {
+                    if parallel && range.len() >= MIN_PARALLEL_BATCH {
+                        range
+                            .clone()
+                            .into_par_iter()
+                            .with_min_len(256)
+                            .for_each(solve);
+                    } else {
+                        range.clone().for_each(solve);
+                    }
+                }
+                uncoloured.clone().for_each(solve);
+            }
+            if long_range_attachments {
+                // The anchors are pinned (inverse mass 0): no projection moves them.
+                // SAFETY: no other access to `positions` is live here.
+                let positions = unsafe { positions.slice_mut(0..particle_count) };
+                // Each particle's anchor is copied next to it first: the attachment loop then reads
+                // contiguous memory and vectorises (a gather inside it kept the compiler from it).
+                for (anchor, &k) in anchors.iter_mut().zip(tether_anchors.iter()) {
+                    *anchor = positions[pinned_indices[k as usize] as usize];
+                }
+                const CHUNK: usize = 4096;
+                if parallel {
+                    positions
+                        .par_chunks_mut(CHUNK)
+                        .zip(anchors.par_chunks(CHUNK))
+                        .zip(tether_lengths.par_chunks(CHUNK))
+                        .for_each(|((x, anchor), length)| apply_tethers(x, anchor, length));
+                } else {
+                    apply_tethers(positions, anchors, tether_lengths);
+                }
+            }
+        }
+    }
+}
+
+by_cpu! {
+    /// Long-range attachments (Kim, Chentanez & Müller 2012, "Long Range Attachments"): particle `i` is
+    /// pulled back onto the sphere of radius `lengths[i]` (m) around `anchors[i]` when it lies outside
+    /// it, and left alone otherwise.
+    fn apply_tethers(positions: &mut [DVec3], anchors: &[DVec3], lengths: &[f64]) {
+        let n = positions.len();
+        let (anchors, lengths) = (&anchors[..n], &lengths[..n]);
+        for i in 0..n {
+            let (x, anchor, rest) = (positions[i], anchors[i], lengths[i]);
+            let offset = x - anchor;
+            let distance = offset.length();
+            positions[i] = if distance > rest {
+                anchor + offset * (rest / distance)
+            } else {
+                x
+            };
         }
     }
 }

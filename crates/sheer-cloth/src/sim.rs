@@ -11,6 +11,7 @@ use glam::{DAffine3, DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
+use crate::grid_constraints::GridConstraints;
 use crate::grid_wind::{add_grid_triangle_forces, grid_triangle_forces};
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
 use crate::parallel::{fill, sum};
@@ -123,9 +124,13 @@ pub struct Simulation {
     pub(crate) triangle_incidence: Incidence,
     pub(crate) positions: Vec<DVec3>,
     pub(crate) velocities: Vec<DVec3>,
-    /// Long-range attachments: for each particle, `(k, rest distance)` to pinned particle
-    /// `pinned_indices[k]`, or `None` for pinned particles and cloths without pins.
-    pub(crate) tethers: Vec<Option<(u32, f64)>>,
+    /// Long-range attachments: particle `i` may lie at most `tether_lengths[i]` (m) from pinned particle
+    /// `pinned_indices[tether_anchors[i]]`. Pinned particles, and every particle of a cloth without pins,
+    /// have an infinite length (never pulled).
+    pub(crate) tether_anchors: Vec<u32>,
+    pub(crate) tether_lengths: Vec<f64>,
+    /// Scratch: where each particle's anchor is, read by the attachments.
+    pub(crate) tether_anchor_positions: Vec<DVec3>,
     /// Where each pinned particle (in `pinned_indices` order) must be at the end of the next step.
     pub(crate) pin_targets: Vec<DVec3>,
     pub(crate) pin_starts: Vec<DVec3>,
@@ -147,6 +152,9 @@ pub struct Simulation {
     /// Position-based solvers: the constraints with their per-step constants, valid for `denominator_key`.
     pub(crate) packed: Vec<crate::position_based::PackedConstraint>,
     pub(crate) denominator_key: Option<SolverKey>,
+    /// Grids: the constraints in row strips, which the position-based solvers project instead of the
+    /// colour batches.
+    pub(crate) grid_constraints: Option<GridConstraints>,
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -260,10 +268,10 @@ impl Simulation {
         let spring_count = springs.len();
         let triangle_count = model.triangles.len();
         // Nearest pinned particle at rest, by straight-line distance (the geodesic on a flat sheet).
-        let tethers = (0..n)
+        let (tether_anchors, tether_lengths) = (0..n)
             .map(|i| {
                 if model.pinned[i] {
-                    return None;
+                    return (0, f64::INFINITY);
                 }
                 pinned_indices
                     .iter()
@@ -275,12 +283,16 @@ impl Simulation {
                         )
                     })
                     .min_by(|x, y| x.1.total_cmp(&y.1))
+                    .unwrap_or((0, f64::INFINITY))
             })
-            .collect();
+            .unzip();
         Ok(Simulation {
             wind: WindField::new(&params.wind),
             family: family_coefficients(&params),
             params,
+            grid_constraints: model
+                .grid
+                .and_then(|shape| GridConstraints::new(shape, &model.springs)),
             grid_triangulation: model
                 .grid
                 .filter(|shape| model.triangles == shape.triangles()),
@@ -288,7 +300,9 @@ impl Simulation {
             masses: model.masses,
             inverse_masses,
             pin_starts: pin_targets.clone(),
-            tethers,
+            tether_anchors,
+            tether_lengths,
+            tether_anchor_positions: vec![DVec3::ZERO; n],
             pin_targets,
             pinned_indices,
             triangles: model.triangles,
@@ -714,14 +728,18 @@ impl Simulation {
         &self.triangles
     }
 
-    /// Springs, in the solver's colour order.
+    /// Springs, in the greedy colour order of the general constraint solver.
     pub fn springs(&self) -> &[Spring] {
         &self.springs
     }
 
-    /// Number of colour batches of the constraint solver.
+    /// Number of batches of the position-based constraint solver: the grid's twelve strip batches on a
+    /// grid cloth, the greedy colours otherwise.
     pub fn colour_count(&self) -> usize {
-        self.colours.len()
+        match &self.grid_constraints {
+            Some(grid) => grid.batches.len(),
+            None => self.colours.len(),
+        }
     }
 
     pub fn grid(&self) -> Option<GridShape> {

@@ -8,35 +8,36 @@
 
 /// Defines `fn $name(args)` whose body is compiled per instruction set and chosen at run time.
 macro_rules! by_cpu {
-    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
+    ($(#[$meta:meta])* $vis:vis fn $name:ident $(<$(const $g:ident: $gt:ty),* $(,)?>)?
+        ($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
         $(#[$meta])*
         #[allow(clippy::too_many_arguments)]
-        $vis fn $name($($arg: $ty),*) {
+        $vis fn $name $(<$(const $g: $gt),*>)? ($($arg: $ty),*) {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
-            fn body($($arg: $ty),*) $body
+            fn body $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $body
             #[cfg(target_arch = "x86_64")]
             {
                 #[target_feature(enable = "avx512f")]
                 #[allow(clippy::too_many_arguments)]
-                fn avx512($($arg: $ty),*) {
-                    body($($arg),*)
+                fn avx512 $(<$(const $g: $gt),*>)? ($($arg: $ty),*) {
+                    body $(::<$($g),*>)? ($($arg),*)
                 }
                 #[target_feature(enable = "avx2")]
                 #[allow(clippy::too_many_arguments)]
-                fn avx2($($arg: $ty),*) {
-                    body($($arg),*)
+                fn avx2 $(<$(const $g: $gt),*>)? ($($arg: $ty),*) {
+                    body $(::<$($g),*>)? ($($arg),*)
                 }
                 if std::arch::is_x86_feature_detected!("avx512f") {
                     // SAFETY: the CPU has AVX-512F, checked just above.
-                    return unsafe { avx512($($arg),*) };
+                    return unsafe { avx512 $(::<$($g),*>)? ($($arg),*) };
                 }
                 if std::arch::is_x86_feature_detected!("avx2") {
                     // SAFETY: the CPU has AVX2, checked just above.
-                    return unsafe { avx2($($arg),*) };
+                    return unsafe { avx2 $(::<$($g),*>)? ($($arg),*) };
                 }
             }
-            body($($arg),*)
+            body $(::<$($g),*>)? ($($arg),*)
         }
     };
 }

@@ -154,7 +154,10 @@ pub(crate) fn corner_share_of_triangle_force(
     [velocity_a, velocity_b, velocity_c]: [DVec3; 3],
     air_velocity: DVec3,
 ) -> DVec3 {
+    // Multiplied by a third rather than divided by 3: six fewer divisions per triangle, which bound the
+    // wind pass.
+    const THIRD: f64 = 1.0 / 3.0;
     let area_normal = (b - a).cross(c - a);
-    let velocity = (velocity_a + velocity_b + velocity_c) / 3.0;
-    aerodynamic_force(params, area_normal, velocity, air_velocity) / 3.0
+    let velocity = (velocity_a + velocity_b + velocity_c) * THIRD;
+    aerodynamic_force(params, area_normal, velocity, air_velocity) * THIRD
 }

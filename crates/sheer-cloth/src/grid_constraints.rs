@@ -1,0 +1,585 @@
+//! The distance constraints of a grid cloth in row strips, projected by vectorised loops.
+//!
+//! A general mesh's constraints come in colour batches found by a greedy colouring, and each is projected
+//! on its own: two particles gathered from anywhere, one square root, one division. That scalar loop is
+//! most of a small-steps XPBD sub-step. On a grid the same constraints fall into twelve batches of
+//! *strips*, runs of constraints whose ends sit at consecutive particle indices:
+//!
+//! - **apart** strips join a run of particles to another run further on (`a + k` to `b + k`): vertical
+//!   stretch and bending, the two shear diagonals, all one row (pair) at a time;
+//! - **along** strips join particles within one row: stretch `(2m, 2m + 1)` and bending
+//!   `(4m + j, 4m + j + 2)`, `j ∈ {0, 1}`.
+//!
+//! Within a batch no two constraints share a particle, so the order inside it does not matter and the
+//! compiler may vectorise each strip ([`by_cpu!`]); rayon may share the strips among threads with the same
+//! result. Batches run bending first, then shear, then stretch, so that each sweep ends on the stiffest
+//! family. The projection of one constraint is [`project`], which the general path uses as well.
+
+use std::ops::Range;
+
+use glam::DVec3;
+
+use crate::model::{GridShape, Spring, SpringKind};
+use crate::vectorise::by_cpu;
+
+/// How a strip's constraints sit in the particle array.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Layout {
+    /// Constraint `k` joins `a + k` and `b + k`, with `b ≥ a + count` (the two runs do not overlap).
+    Apart { b: usize },
+    /// Constraint `m·half + j` joins `a + 2m·half + j` and `a + 2m·half + j + half` (`j < half`).
+    Along { half: usize },
+}
+
+/// A run of constraints of one family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Strip {
+    /// Index of the strip's first constraint in [`GridConstraints::springs`].
+    pub first: usize,
+    pub count: usize,
+    /// First particle.
+    pub a: usize,
+    pub layout: Layout,
+}
+
+impl Strip {
+    /// The particles the strip touches, as index ranges (one for an along strip, two for an apart one).
+    pub fn particle_ranges(&self) -> [Range<usize>; 2] {
+        match self.layout {
+            Layout::Apart { b } => [self.a..self.a + self.count, b..b + self.count],
+            Layout::Along { .. } => [self.a..self.a + 2 * self.count, 0..0],
+        }
+    }
+
+    /// Particle indices of constraint `k` of the strip.
+    pub fn ends(&self, k: usize) -> (usize, usize) {
+        match self.layout {
+            Layout::Apart { b } => (self.a + k, b + k),
+            Layout::Along { half } => {
+                let (m, j) = (k / half, k % half);
+                let a = self.a + 2 * m * half + j;
+                (a, a + half)
+            }
+        }
+    }
+}
+
+/// A grid cloth's constraints in strips and batches, with the per-constraint data the solver streams.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct GridConstraints {
+    /// The springs in strip order; the constants below are built from them.
+    pub springs: Vec<Spring>,
+    pub strips: Vec<Strip>,
+    /// Ranges of `strips`; the constraints of one batch share no particle.
+    pub batches: Vec<Range<usize>>,
+    /// Per constraint, in strip order: rest length (m), the inverted divisor of the update (see
+    /// `PackedConstraint::inverse_denominator`), and the XPBD multiplier.
+    pub rest_lengths: Vec<f64>,
+    pub inverse_denominators: Vec<f64>,
+    pub lambdas: Vec<f64>,
+}
+
+impl GridConstraints {
+    /// Strips and batches for `springs` when they are exactly the grid's own ([`GridShape::spring_pairs`],
+    /// same ends in the same roles, any order); `None` otherwise (the general path then serves).
+    pub fn new(shape: GridShape, springs: &[Spring]) -> Option<GridConstraints> {
+        let (columns, rows) = (shape.columns, shape.rows);
+        if columns < 2 || rows < 2 || springs.len() != shape.spring_pairs().len() {
+            return None;
+        }
+        let mut by_ends = std::collections::HashMap::with_capacity(springs.len());
+        for spring in springs {
+            if by_ends
+                .insert((spring.a as usize, spring.b as usize), *spring)
+                .is_some()
+            {
+                return None; // a repeated spring: not the grid's set
+            }
+        }
+        let mut grid = GridConstraints::default();
+        let mut batch: Vec<Strip> = Vec::new();
+        // Adds a strip of constraints with the given ends, each found among `springs` with `kind`.
+        let strip = |grid: &mut GridConstraints,
+                     batch: &mut Vec<Strip>,
+                     a: usize,
+                     count: usize,
+                     layout: Layout,
+                     kind: SpringKind|
+         -> Option<()> {
+            if count == 0 {
+                return Some(());
+            }
+            let strip = Strip {
+                first: grid.springs.len(),
+                count,
+                a,
+                layout,
+            };
+            for k in 0..count {
+                let spring = by_ends.get(&strip.ends(k))?;
+                if spring.kind != kind {
+                    return None;
+                }
+                grid.springs.push(*spring);
+            }
+            batch.push(strip);
+            Some(())
+        };
+        let close_batch = |grid: &mut GridConstraints, batch: &mut Vec<Strip>| {
+            if !batch.is_empty() {
+                let start = grid.strips.len();
+                grid.strips.append(batch);
+                grid.batches.push(start..grid.strips.len());
+            }
+        };
+        let row_start = |row: usize| row * columns;
+        // Bending along rows: columns 4m + {0, 1} (from `first` = 0) or 4m + {2, 3} (`first` = 2).
+        for first in [0, 2] {
+            for row in 0..rows {
+                let reach = columns.saturating_sub(first); // columns from `first` on
+                let chunks = reach / 4;
+                let a = row_start(row) + first;
+                strip(
+                    &mut grid,
+                    &mut batch,
+                    a,
+                    2 * chunks,
+                    Layout::Along { half: 2 },
+                    SpringKind::Bend,
+                )?;
+                // A last column pair whose partner lies beyond the chunks: 4 chunks + 2 < reach.
+                if 4 * chunks + 2 < reach {
+                    let a = a + 4 * chunks;
+                    strip(
+                        &mut grid,
+                        &mut batch,
+                        a,
+                        1,
+                        Layout::Apart { b: a + 2 },
+                        SpringKind::Bend,
+                    )?;
+                }
+            }
+            close_batch(&mut grid, &mut batch);
+        }
+        // Bending down columns: rows 4m + {0, 1}, then 4m + {2, 3}.
+        for first in [0, 2] {
+            for row in (0..rows.saturating_sub(2)).filter(|r| r % 4 == first || r % 4 == first + 1)
+            {
+                let a = row_start(row);
+                let b = a + 2 * columns;
+                let layout = Layout::Apart { b };
+                strip(&mut grid, &mut batch, a, columns, layout, SpringKind::Bend)?;
+            }
+            close_batch(&mut grid, &mut batch);
+        }
+        // Shear: the diagonal (r, c)–(r+1, c+1) and the anti-diagonal (r, c+1)–(r+1, c), even rows then
+        // odd rows of cells.
+        for (offset, b_shift) in [(0, columns + 1), (1, columns - 1)] {
+            for parity in [0, 1] {
+                for row in (parity..rows - 1).step_by(2) {
+                    let a = row_start(row) + offset;
+                    let layout = Layout::Apart { b: a + b_shift };
+                    strip(
+                        &mut grid,
+                        &mut batch,
+                        a,
+                        columns - 1,
+                        layout,
+                        SpringKind::Shear,
+                    )?;
+                }
+                close_batch(&mut grid, &mut batch);
+            }
+        }
+        // Stretch down columns (even rows, odd rows), then along rows (even columns, odd columns).
+        for parity in [0, 1] {
+            for row in (parity..rows - 1).step_by(2) {
+                let a = row_start(row);
+                let layout = Layout::Apart { b: a + columns };
+                strip(
+                    &mut grid,
+                    &mut batch,
+                    a,
+                    columns,
+                    layout,
+                    SpringKind::Stretch,
+                )?;
+            }
+            close_batch(&mut grid, &mut batch);
+        }
+        for parity in [0, 1] {
+            for row in 0..rows {
+                let count = (columns - parity) / 2;
+                let layout = Layout::Along { half: 1 };
+                let a = row_start(row) + parity;
+                strip(&mut grid, &mut batch, a, count, layout, SpringKind::Stretch)?;
+            }
+            close_batch(&mut grid, &mut batch);
+        }
+        if grid.springs.len() != springs.len() {
+            return None;
+        }
+        let n = grid.springs.len();
+        grid.rest_lengths = grid.springs.iter().map(|s| s.rest_length).collect();
+        grid.inverse_denominators = vec![0.0; n];
+        grid.lambdas = vec![0.0; n];
+        Some(grid)
+    }
+}
+
+/// Per-sub-step constants of one constraint family: `(α̃, γ)` of XPBD (Macklin et al. 2016 eqs. (18) and
+/// (26)); unused by PBD.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct FamilyConstants {
+    /// `α̃ = α/h²`, with compliance `α = 1/k` (m/N) and sub-step `h` (s): 1/kg.
+    pub scaled_compliance: f64,
+    /// `γ = α β / h` with damping `β` (N·s/m): dimensionless.
+    pub gamma: f64,
+}
+
+/// Projects one distance constraint `|x_a − x_b| = rest` (Macklin, Müller & Chentanez 2016, eq. (18) with
+/// the damping of eq. (26); PBD: Müller et al. 2007 §3.3 with the divisor folded into
+/// `inverse_denominator`). Nothing moves when the constraint is inactive (`inverse_denominator` = 0: a
+/// switched-off family or both ends pinned) or the ends coincide (no gradient direction). With
+/// `MULTIPLIERS` the accumulated multiplier λ is read and updated; without it λ is taken as 0 (one
+/// iteration: it is always 0 when read).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool>(
+    x_a: &mut DVec3,
+    x_b: &mut DVec3,
+    previous_a: DVec3,
+    previous_b: DVec3,
+    inverse_mass_a: f64,
+    inverse_mass_b: f64,
+    rest_length: f64,
+    inverse_denominator: f64,
+    lambda: &mut f64,
+    family: FamilyConstants,
+) {
+    let delta = *x_a - *x_b;
+    let length = delta.length();
+    let gradient = delta * (1.0 / length);
+    let constraint = length - rest_length;
+    let correction = if PBD {
+        -constraint * inverse_denominator
+    } else {
+        let rate = gradient.dot((*x_a - previous_a) - (*x_b - previous_b));
+        let lambda = if MULTIPLIERS { *lambda } else { 0.0 };
+        (-constraint - family.scaled_compliance * lambda - family.gamma * rate)
+            * inverse_denominator
+    };
+    // Selected, not branched on, so that the strip loops vectorise.
+    let active = inverse_denominator != 0.0 && length != 0.0;
+    let correction = if active { correction } else { 0.0 };
+    let step = if active {
+        correction * gradient
+    } else {
+        DVec3::ZERO
+    };
+    if MULTIPLIERS {
+        *lambda += correction;
+    }
+    *x_a += inverse_mass_a * step;
+    *x_b -= inverse_mass_b * step;
+}
+
+by_cpu! {
+    /// Projects an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`.
+    pub(crate) fn project_apart<const PBD: bool, const MULTIPLIERS: bool>(
+        x_a: &mut [DVec3],
+        x_b: &mut [DVec3],
+        previous_a: &[DVec3],
+        previous_b: &[DVec3],
+        inverse_mass_a: &[f64],
+        inverse_mass_b: &[f64],
+        rest_lengths: &[f64],
+        inverse_denominators: &[f64],
+        lambdas: &mut [f64],
+        family: FamilyConstants,
+    ) {
+        // Exact lengths: no bounds checks in the loop.
+        let n = x_a.len();
+        let (x_b, previous_a, previous_b) = (&mut x_b[..n], &previous_a[..n], &previous_b[..n]);
+        let (inverse_mass_a, inverse_mass_b) = (&inverse_mass_a[..n], &inverse_mass_b[..n]);
+        let (rest_lengths, inverse_denominators) = (&rest_lengths[..n], &inverse_denominators[..n]);
+        let lambdas = &mut lambdas[..n];
+        for k in 0..n {
+            project::<PBD, MULTIPLIERS>(
+                &mut x_a[k],
+                &mut x_b[k],
+                previous_a[k],
+                previous_b[k],
+                inverse_mass_a[k],
+                inverse_mass_b[k],
+                rest_lengths[k],
+                inverse_denominators[k],
+                &mut lambdas[k],
+                family,
+            );
+        }
+    }
+}
+
+by_cpu! {
+    /// Projects an along strip of `HALF` interleaved constraints per chunk of `CHUNK = 2·HALF` particles:
+    /// constraint `m·HALF + j` joins `x[m][j]` and `x[m][j + HALF]`.
+    pub(crate) fn project_along<const PBD: bool, const MULTIPLIERS: bool, const HALF: usize, const CHUNK: usize>(
+        x: &mut [[DVec3; CHUNK]],
+        previous: &[[DVec3; CHUNK]],
+        inverse_masses: &[[f64; CHUNK]],
+        rest_lengths: &[[f64; HALF]],
+        inverse_denominators: &[[f64; HALF]],
+        lambdas: &mut [[f64; HALF]],
+        family: FamilyConstants,
+    ) {
+        let n = x.len();
+        let (previous, inverse_masses) = (&previous[..n], &inverse_masses[..n]);
+        let (rest_lengths, inverse_denominators) = (&rest_lengths[..n], &inverse_denominators[..n]);
+        let lambdas = &mut lambdas[..n];
+        for m in 0..n {
+            let (low, high) = x[m].split_at_mut(HALF);
+            for j in 0..HALF {
+                project::<PBD, MULTIPLIERS>(
+                    &mut low[j],
+                    &mut high[j],
+                    previous[m][j],
+                    previous[m][j + HALF],
+                    inverse_masses[m][j],
+                    inverse_masses[m][j + HALF],
+                    rest_lengths[m][j],
+                    inverse_denominators[m][j],
+                    &mut lambdas[m][j],
+                    family,
+                );
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{ClothModel, GridSpec};
+
+    fn grid_springs(columns: usize, rows: usize) -> (GridShape, Vec<Spring>) {
+        let spec = GridSpec {
+            columns,
+            rows,
+            ..GridSpec::default()
+        };
+        let model = ClothModel::grid(&spec).unwrap();
+        (model.grid.unwrap(), model.springs)
+    }
+
+    #[test]
+    fn grid_strips_cover_every_spring_once_and_no_batch_shares_a_particle() {
+        for (columns, rows) in [
+            (2, 2),
+            (3, 2),
+            (2, 5),
+            (5, 3),
+            (6, 4),
+            (7, 7),
+            (8, 9),
+            (11, 6),
+            (64, 46),
+        ] {
+            let (shape, springs) = grid_springs(columns, rows);
+            let grid = GridConstraints::new(shape, &springs)
+                .unwrap_or_else(|| panic!("{columns}×{rows}: the grid's own springs"));
+            let mut expected: Vec<(u32, u32)> = springs.iter().map(|s| (s.a, s.b)).collect();
+            let mut got: Vec<(u32, u32)> = grid.springs.iter().map(|s| (s.a, s.b)).collect();
+            expected.sort_unstable();
+            got.sort_unstable();
+            assert_eq!(got, expected, "{columns}×{rows}: each spring exactly once");
+            let mut next = 0;
+            for batch in &grid.batches {
+                let mut touched = vec![false; columns * rows];
+                for strip in &grid.strips[batch.clone()] {
+                    assert_eq!(strip.first, next, "strips are consecutive");
+                    next += strip.count;
+                    let [first, second] = strip.particle_ranges();
+                    assert!(first.end <= second.start || second.is_empty());
+                    for k in 0..strip.count {
+                        let spring = grid.springs[strip.first + k];
+                        let (a, b) = strip.ends(k);
+                        assert_eq!((spring.a as usize, spring.b as usize), (a, b));
+                        assert!(first.contains(&a) && (first.contains(&b) || second.contains(&b)));
+                    }
+                    for particle in first.chain(second) {
+                        assert!(
+                            !touched[particle],
+                            "{columns}×{rows}: particle {particle} twice in a batch"
+                        );
+                        touched[particle] = true;
+                    }
+                }
+            }
+            assert_eq!(next, springs.len());
+        }
+    }
+
+    #[test]
+    fn springs_that_are_not_the_grids_own_take_the_general_path() {
+        let (shape, springs) = grid_springs(6, 5);
+        assert!(GridConstraints::new(shape, &springs).is_some());
+        let mut missing = springs.clone();
+        missing.pop();
+        assert!(GridConstraints::new(shape, &missing).is_none());
+        let mut extra = springs.clone();
+        extra.push(springs[0]);
+        assert!(GridConstraints::new(shape, &extra).is_none());
+        let mut swapped = springs.clone();
+        let spring = &mut swapped[3];
+        (spring.a, spring.b) = (spring.b, spring.a);
+        assert!(GridConstraints::new(shape, &swapped).is_none());
+        let mut other_kind = springs.clone();
+        other_kind[0].kind = SpringKind::Bend;
+        assert!(GridConstraints::new(shape, &other_kind).is_none());
+    }
+
+    /// The vectorised strip loops give the bits of [`project`] called one constraint at a time, for
+    /// PBD, XPBD with and without multipliers, with inactive constraints and coincident ends.
+    #[test]
+    fn strip_loops_match_the_one_constraint_projection_bit_for_bit() {
+        let n = 48;
+        let jitter = |i: usize, k: u64| {
+            let mut z = (i as u64 + 7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ k;
+            z = (z ^ (z >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut x: Vec<DVec3> = (0..n)
+            .map(|i| DVec3::new(0.02 * i as f64, jitter(i, 1) * 0.01, jitter(i, 2) * 0.01))
+            .collect();
+        x[5] = x[5 + n / 2]; // coincident ends of constraint 5 (apart) and of an along pair
+        x[10] = x[11];
+        let previous: Vec<DVec3> = x
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p + 1e-3 * DVec3::new(jitter(i, 3), jitter(i, 4), jitter(i, 5)))
+            .collect();
+        let w: Vec<f64> = (0..n).map(|i| 1e4 * (1.0 + jitter(i, 6))).collect();
+        let half = n / 2;
+        let rest: Vec<f64> = (0..half).map(|k| 0.018 + 1e-3 * jitter(k, 7)).collect();
+        let mut denominators: Vec<f64> = (0..half).map(|k| 2e-5 * (1.5 + jitter(k, 8))).collect();
+        denominators[7] = 0.0; // switched off
+        let family = FamilyConstants {
+            scaled_compliance: 9.0,
+            gamma: 0.3,
+        };
+        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+            v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+        };
+        fn check<const PBD: bool, const MULTIPLIERS: bool>(
+            x: &[DVec3],
+            previous: &[DVec3],
+            w: &[f64],
+            rest: &[f64],
+            denominators: &[f64],
+            family: FamilyConstants,
+            bits: &dyn Fn(&[DVec3]) -> Vec<[u64; 3]>,
+        ) {
+            let half = x.len() / 2;
+            let lambdas0: Vec<f64> = (0..half).map(|k| 1e-4 * k as f64).collect();
+            // Apart: constraint k joins k and k + half.
+            let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
+            for k in 0..half {
+                let (low, high) = expected.split_at_mut(half);
+                project::<PBD, MULTIPLIERS>(
+                    &mut low[k],
+                    &mut high[k],
+                    previous[k],
+                    previous[k + half],
+                    w[k],
+                    w[k + half],
+                    rest[k],
+                    denominators[k],
+                    &mut expected_lambdas[k],
+                    family,
+                );
+            }
+            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
+            let (low, high) = got.split_at_mut(half);
+            project_apart::<PBD, MULTIPLIERS>(
+                low,
+                high,
+                &previous[..half],
+                &previous[half..],
+                &w[..half],
+                &w[half..],
+                rest,
+                denominators,
+                &mut got_lambdas,
+                family,
+            );
+            assert_eq!(bits(&got), bits(&expected), "apart, PBD {PBD}");
+            assert_eq!(got_lambdas, expected_lambdas);
+            // Along, pairs: constraint m joins 2m and 2m + 1.
+            let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
+            for m in 0..half {
+                let (low, high) = expected.split_at_mut(2 * m + 1);
+                project::<PBD, MULTIPLIERS>(
+                    &mut low[2 * m],
+                    &mut high[0],
+                    previous[2 * m],
+                    previous[2 * m + 1],
+                    w[2 * m],
+                    w[2 * m + 1],
+                    rest[m],
+                    denominators[m],
+                    &mut expected_lambdas[m],
+                    family,
+                );
+            }
+            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
+            project_along::<PBD, MULTIPLIERS, 1, 2>(
+                got.as_chunks_mut().0,
+                previous.as_chunks().0,
+                w.as_chunks().0,
+                rest.as_chunks().0,
+                denominators.as_chunks().0,
+                got_lambdas.as_chunks_mut().0,
+                family,
+            );
+            assert_eq!(bits(&got), bits(&expected), "along pairs, PBD {PBD}");
+            assert_eq!(got_lambdas, expected_lambdas);
+            // Along, quads: constraint 2m + j joins 4m + j and 4m + j + 2.
+            let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
+            for c in 0..half {
+                let (m, j) = (c / 2, c % 2);
+                let a = 4 * m + j;
+                let (low, high) = expected.split_at_mut(a + 2);
+                project::<PBD, MULTIPLIERS>(
+                    &mut low[a],
+                    &mut high[0],
+                    previous[a],
+                    previous[a + 2],
+                    w[a],
+                    w[a + 2],
+                    rest[c],
+                    denominators[c],
+                    &mut expected_lambdas[c],
+                    family,
+                );
+            }
+            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0);
+            project_along::<PBD, MULTIPLIERS, 2, 4>(
+                got.as_chunks_mut().0,
+                previous.as_chunks().0,
+                w.as_chunks().0,
+                rest.as_chunks().0,
+                denominators.as_chunks().0,
+                got_lambdas.as_chunks_mut().0,
+                family,
+            );
+            assert_eq!(bits(&got), bits(&expected), "along quads, PBD {PBD}");
+            assert_eq!(got_lambdas, expected_lambdas);
+            assert_ne!(bits(&got), bits(x), "the constraints moved the particles");
+        }
+        check::<true, false>(&x, &previous, &w, &rest, &denominators, family, &bits);
+        check::<false, false>(&x, &previous, &w, &rest, &denominators, family, &bits);
+        check::<false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
+    }
+}
