@@ -171,10 +171,10 @@ impl Method {
 }
 
 impl Default for Method {
-    /// Small-steps XPBD with 20 sub-steps: the study's automatic choice for the default flag
+    /// Small-steps XPBD with 40 sub-steps: the study's automatic choice for the default flag
     /// (`docs/choice.toml`, `docs/study.md`; the app tests that its default scene matches it).
     fn default() -> Self {
-        Method::SmallStepsXpbd { substeps: 20 }
+        Method::SmallStepsXpbd { substeps: 40 }
     }
 }
 
