@@ -3,8 +3,9 @@
 //! Müller 2019) — one loop, three settings.
 //!
 //! Per sub-step: external forces into velocities, predict positions, project the distance constraints
-//! colour batch by colour batch (Gauss–Seidel across batches, independent within a batch, so a batch
-//! can run in parallel with the same result), then velocities from the position change.
+//! batch by batch (Gauss–Seidel across batches, independent within a batch, so a batch can run in
+//! parallel with the same result), then velocities from the position change. The batches are a grid's
+//! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring.
 
 use glam::DVec3;
 use rayon::prelude::*;
