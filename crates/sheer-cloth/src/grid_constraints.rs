@@ -11,7 +11,7 @@
 //!   `(4m + j, 4m + j + 2)`, `j ∈ {0, 1}`.
 //!
 //! Within a batch no two constraints share a particle, so the order inside it does not matter and the
-//! compiler may vectorise each strip ([`by_cpu!`]); rayon may share the strips among threads with the same
+//! compiler may vectorise each strip ([`by_cpu!`]); the threads may share the strips with the same
 //! result. Batches run bending first, then shear, then stretch, so that each sweep ends on the stiffest
 //! family. The projection of one constraint is [`project`], which the general path uses as well.
 

@@ -15,16 +15,15 @@
 
 use std::ops::Range;
 
-use glam::DVec3;
-use rayon::prelude::*;
-
 use crate::model::GridShape;
+use crate::parallel::{DisjointSlice, parts};
 use crate::params::Wind;
 use crate::vectorise::by_cpu;
 use crate::wind::corner_share_of_triangle_force;
+use glam::DVec3;
 
 /// Writes each triangle's corner share of its aerodynamic force (N) into `out`, indexed like
-/// [`GridShape::triangles`]. Rows of cells are shared among rayon's threads when `parallel`.
+/// [`GridShape::triangles`]. Rows of cells are shared among the threads when `parallel` ([`parts`]).
 pub(crate) fn grid_triangle_forces(
     shape: GridShape,
     wind: &Wind,
@@ -37,8 +36,11 @@ pub(crate) fn grid_triangle_forces(
     let cells_per_row = shape.columns - 1;
     let (out, _) = out.as_chunks_mut::<2>();
     assert_eq!(out.len(), cells_per_row * (shape.rows - 1));
-    let rows = |first_row: usize, out: &mut [[DVec3; 2]]| {
-        let rows = first_row..first_row + out.len() / cells_per_row;
+    let out = DisjointSlice::new(out);
+    // Eight rows of cells per rayon task: enough work to cover rayon's hand-off.
+    parts(shape.rows - 1, parallel, 8, |rows| {
+        // SAFETY: the parts of the rows are disjoint, so are their cells.
+        let out = unsafe { out.slice_mut(rows.start * cells_per_row..rows.end * cells_per_row) };
         cell_rows(
             shape.columns,
             wind,
@@ -48,16 +50,7 @@ pub(crate) fn grid_triangle_forces(
             rows,
             out,
         );
-    };
-    if parallel {
-        // Eight rows of cells per task: enough work to cover rayon's hand-off.
-        const ROWS_PER_TASK: usize = 8;
-        out.par_chunks_mut(ROWS_PER_TASK * cells_per_row)
-            .enumerate()
-            .for_each(|(task, out)| rows(task * ROWS_PER_TASK, out));
-    } else {
-        rows(0, out);
-    }
+    });
 }
 
 by_cpu! {
@@ -110,14 +103,29 @@ by_cpu! {
     }
 }
 
+/// Gravity and air damping on each particle, `m (g − c v)` (N), the force every particle starts from.
+pub(crate) struct BodyForce<'a> {
+    /// Particle masses (kg).
+    pub masses: &'a [f64],
+    /// Particle velocities (m/s).
+    pub velocities: &'a [DVec3],
+    /// Gravitational acceleration (m/s²).
+    pub gravity: DVec3,
+    /// Air damping rate `c` (1/s).
+    pub air_damping: f64,
+}
+
 /// Adds each triangle's corner share in `shares` (indexed like [`GridShape::triangles`]) to its three
 /// corners' entries of `forces`. Each particle takes its (up to six) triangles in ascending triangle
-/// order, the order in which the general path scatters them, so the sums are the same bits.
+/// order, the order in which the general path scatters them, so the sums are the same bits. With `body`,
+/// each row of `forces` is first set to the body force, in the same pass (the sum starts from it, as the
+/// general path's does).
 pub(crate) fn add_grid_triangle_forces(
     shape: GridShape,
     shares: &[DVec3],
     forces: &mut [DVec3],
     parallel: bool,
+    body: Option<&BodyForce>,
 ) {
     let columns = shape.columns;
     let (cells, _) = shares.as_chunks::<2>();
@@ -133,15 +141,39 @@ pub(crate) fn add_grid_triangle_forces(
             (row + 1 < shape.rows).then(|| &cells[row * cells_per_row..(row + 1) * cells_per_row]);
         add_to_particle_row(above, below, forces);
     };
-    if parallel {
-        forces
-            .par_chunks_mut(columns)
-            .enumerate()
-            .with_min_len(8)
-            .for_each(|(r, forces)| row(r, forces));
-    } else {
-        for (r, forces) in forces.chunks_exact_mut(columns).enumerate() {
+    let forces = DisjointSlice::new(forces);
+    parts(shape.rows, parallel, 8, |rows| {
+        for r in rows {
+            let particles = r * columns..(r + 1) * columns;
+            // SAFETY: the parts of the rows are disjoint.
+            let forces = unsafe { forces.slice_mut(particles.clone()) };
+            if let Some(body) = body {
+                body_force_row(
+                    &body.masses[particles.clone()],
+                    &body.velocities[particles],
+                    body.gravity,
+                    body.air_damping,
+                    forces,
+                );
+            }
             row(r, forces);
+        }
+    });
+}
+
+by_cpu! {
+    /// `forces[i] = m_i (g − c v_i)` (N) over one row; see [`BodyForce`].
+    fn body_force_row(
+        masses: &[f64],
+        velocities: &[DVec3],
+        gravity: DVec3,
+        air_damping: f64,
+        forces: &mut [DVec3],
+    ) {
+        let n = forces.len();
+        let (masses, velocities) = (&masses[..n], &velocities[..n]);
+        for i in 0..n {
+            forces[i] = masses[i] * (gravity - air_damping * velocities[i]);
         }
     }
 }

@@ -5,7 +5,8 @@
 //! Per sub-step: external forces into velocities, predict positions, project the distance constraints
 //! batch by batch (Gauss–Seidel across batches, independent within a batch, so a batch can run in
 //! parallel with the same result), then velocities from the position change. The batches are a grid's
-//! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring.
+//! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. In parallel, a grid's
+//! passes go to the simulation's team of threads ([`parts`]), a mesh's to rayon.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -14,7 +15,7 @@ use crate::grid_constraints::{
     FamilyConstants, GridConstraints, Layout, Strip, project, project_along, project_apart,
 };
 use crate::model::Spring;
-use crate::parallel::{DisjointSlice, fill};
+use crate::parallel::{DisjointSlice, fill, parts};
 use crate::sim::{Simulation, family_index};
 use crate::vectorise::by_cpu;
 
@@ -35,6 +36,9 @@ pub(crate) struct PackedConstraint {
 
 /// Batches smaller than this run on one thread even in parallel mode: rayon's fork–join costs more.
 const MIN_PARALLEL_BATCH: usize = 2048;
+
+/// Particles per rayon task in the per-particle passes.
+const PARTICLE_GRAIN: usize = 4096;
 
 impl Simulation {
     /// One sub-step of length `h` at time `t`. `pbd_stiffness` selects PBD with that dimensionless
@@ -58,34 +62,24 @@ impl Simulation {
                 ..
             } = self;
             let (inverse_masses, forces) = (&inverse_masses[..], &forces[..]);
-            if parallel {
-                const CHUNK: usize = 4096;
-                positions
-                    .par_chunks_mut(CHUNK)
-                    .zip(velocities.par_chunks_mut(CHUNK))
-                    .zip(previous_positions.par_chunks_mut(CHUNK))
-                    .enumerate()
-                    .for_each(|(chunk, ((x, v), previous))| {
-                        let range = chunk * CHUNK..chunk * CHUNK + x.len();
-                        predict_positions(
-                            h,
-                            &inverse_masses[range.clone()],
-                            &forces[range],
-                            x,
-                            v,
-                            previous,
-                        );
-                    });
-            } else {
-                predict_positions(
-                    h,
-                    inverse_masses,
-                    forces,
-                    positions,
-                    velocities,
-                    previous_positions,
-                );
-            }
+            let (positions, velocities, previous_positions) = (
+                DisjointSlice::new(positions),
+                DisjointSlice::new(velocities),
+                DisjointSlice::new(previous_positions),
+            );
+            parts(inverse_masses.len(), parallel, PARTICLE_GRAIN, |range| {
+                // SAFETY: the parts are disjoint.
+                unsafe {
+                    predict_positions(
+                        h,
+                        &inverse_masses[range.clone()],
+                        &forces[range.clone()],
+                        positions.slice_mut(range.clone()),
+                        velocities.slice_mut(range.clone()),
+                        previous_positions.slice_mut(range),
+                    )
+                }
+            });
         }
         // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
         // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
@@ -169,31 +163,17 @@ impl Simulation {
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
         // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
         let multipliers = iterations > 1 && !is_pbd;
-        match (is_pbd, multipliers) {
-            (true, _) => self.project_constraints::<true, false>(iterations, family_constants),
-            (false, true) => self.project_constraints::<false, true>(iterations, family_constants),
-            (false, false) => {
-                self.project_constraints::<false, false>(iterations, family_constants)
-            }
-        }
-        let Simulation {
-            positions,
-            velocities,
-            previous_positions,
-            ..
-        } = self;
         let inverse_h = 1.0 / h;
-        if parallel {
-            const CHUNK: usize = 4096;
-            velocities
-                .par_chunks_mut(CHUNK)
-                .zip(positions.par_chunks(CHUNK))
-                .zip(previous_positions.par_chunks(CHUNK))
-                .for_each(|((v, x), previous)| {
-                    velocities_from_positions(inverse_h, x, previous, v)
-                });
-        } else {
-            velocities_from_positions(inverse_h, positions, previous_positions, velocities);
+        match (is_pbd, multipliers) {
+            (true, _) => {
+                self.project_constraints::<true, false>(iterations, family_constants, inverse_h)
+            }
+            (false, true) => {
+                self.project_constraints::<false, true>(iterations, family_constants, inverse_h)
+            }
+            (false, false) => {
+                self.project_constraints::<false, false>(iterations, family_constants, inverse_h)
+            }
         }
         self.cached_forces_valid = false;
     }
@@ -239,16 +219,19 @@ by_cpu! {
 
 impl Simulation {
     /// `iterations` Gauss–Seidel sweeps over the constraints, batch by batch, each followed by the
-    /// long-range attachments. Grids go strip by strip ([`GridConstraints`]), other meshes constraint by
-    /// constraint in their colour batches; both project with [`project`].
+    /// long-range attachments, then the velocities from the position change (`inverse_h = 1/h`, 1/s) in
+    /// the same pass as the last attachments. Grids go strip by strip ([`GridConstraints`]), other meshes
+    /// constraint by constraint in their colour batches; both project with [`project`].
     fn project_constraints<const PBD: bool, const MULTIPLIERS: bool>(
         &mut self,
         iterations: u32,
         family: [FamilyConstants; 3],
+        inverse_h: f64,
     ) {
         let parallel = self.parallel();
         let Simulation {
             positions,
+            velocities,
             previous_positions,
             colours,
             uncoloured,
@@ -257,6 +240,7 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_anchor_positions: anchors,
+            tether_pin_positions: pin_positions,
             pinned_indices,
             params,
             inverse_masses,
@@ -303,7 +287,9 @@ impl Simulation {
                 }
             }
         };
-        for _ in 0..iterations {
+        let velocities = DisjointSlice::new(velocities);
+        let anchors = DisjointSlice::new(anchors);
+        for iteration in 0..iterations {
             if let Some(grid) = grid_constraints.as_mut() {
                 let GridConstraints {
                     springs,
@@ -373,11 +359,9 @@ impl Simulation {
                 };
                 for batch in batches.iter() {
                     let strips = &strips[batch.clone()];
-                    if parallel {
-                        strips.par_iter().with_min_len(4).for_each(project_strip);
-                    } else {
-                        strips.iter().for_each(project_strip);
-                    }
+                    parts(strips.len(), parallel, 4, |range| {
+                        strips[range].iter().for_each(project_strip)
+                    });
                 }
             } else {
                 for range in colours.iter() {
@@ -393,25 +377,40 @@ impl Simulation {
                 }
                 uncoloured.clone().for_each(solve);
             }
+            let last = iteration + 1 == iterations;
             if long_range_attachments {
-                // The anchors are pinned (inverse mass 0): no projection moves them.
-                // SAFETY: no other access to `positions` is live here.
-                let positions = unsafe { positions.slice_mut(0..particle_count) };
-                // Each particle's anchor is copied next to it first: the attachment loop then reads
-                // contiguous memory and vectorises (a gather inside it kept the compiler from it).
-                for (anchor, &k) in anchors.iter_mut().zip(tether_anchors.iter()) {
-                    *anchor = positions[pinned_indices[k as usize] as usize];
+                // The anchors are pinned (inverse mass 0): no projection moves them. Their positions are
+                // gathered once here, so that the parallel pass below reads no position another part
+                // writes.
+                for (anchor, &i) in pin_positions.iter_mut().zip(pinned_indices.iter()) {
+                    // SAFETY: no pass is running.
+                    *anchor = unsafe { positions.get(i as usize) };
                 }
-                const CHUNK: usize = 4096;
-                if parallel {
-                    positions
-                        .par_chunks_mut(CHUNK)
-                        .zip(anchors.par_chunks(CHUNK))
-                        .zip(tether_lengths.par_chunks(CHUNK))
-                        .for_each(|((x, anchor), length)| apply_tethers(x, anchor, length));
-                } else {
-                    apply_tethers(positions, anchors, tether_lengths);
-                }
+            }
+            let pin_positions = &pin_positions[..];
+            if long_range_attachments || last {
+                parts(particle_count, parallel, PARTICLE_GRAIN, |range| {
+                    // SAFETY: the parts are disjoint.
+                    unsafe {
+                        let x = positions.slice_mut(range.clone());
+                        if long_range_attachments {
+                            // Each particle's anchor is copied next to it first: the attachment loop
+                            // then reads contiguous memory and vectorises (a gather inside it kept the
+                            // compiler from it).
+                            let anchors = anchors.slice_mut(range.clone());
+                            for (anchor, &k) in
+                                anchors.iter_mut().zip(&tether_anchors[range.clone()])
+                            {
+                                *anchor = pin_positions[k as usize];
+                            }
+                            apply_tethers(x, anchors, &tether_lengths[range.clone()]);
+                        }
+                        if last {
+                            let v = velocities.slice_mut(range.clone());
+                            velocities_from_positions(inverse_h, x, &previous[range], v);
+                        }
+                    }
+                });
             }
         }
     }

@@ -8,13 +8,12 @@
 use std::ops::Range;
 
 use glam::{DAffine3, DVec3, Vec3};
-use rayon::prelude::*;
 
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
 use crate::grid_constraints::GridConstraints;
-use crate::grid_wind::{add_grid_triangle_forces, grid_triangle_forces};
+use crate::grid_wind::{BodyForce, add_grid_triangle_forces, grid_triangle_forces};
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
-use crate::parallel::{fill, sum};
+use crate::parallel::{TeamSlot, fill, first_index, sum};
 use crate::params::{Method, SimParams, SpringParams};
 use crate::wind::{WindField, corner_share_of_triangle_force};
 
@@ -97,6 +96,9 @@ pub(crate) struct CgScratch {
     pub spring_terms: Vec<DVec3>,
 }
 
+/// Particle count from which a team claims its passes chunk by chunk ([`TeamSlot::lead`]).
+const TEAM_CLAIMS_FROM_PARTICLES: usize = 16_384;
+
 /// A running cloth simulation. Build it from a [`ClothModel`] and [`SimParams`], then call
 /// [`step`](Simulation::step).
 #[derive(Clone, Debug)]
@@ -131,6 +133,8 @@ pub struct Simulation {
     pub(crate) tether_lengths: Vec<f64>,
     /// Scratch: where each particle's anchor is, read by the attachments.
     pub(crate) tether_anchor_positions: Vec<DVec3>,
+    /// Scratch: where each pinned particle is, in `pinned_indices` order, read by the attachments.
+    pub(crate) tether_pin_positions: Vec<DVec3>,
     /// Where each pinned particle (in `pinned_indices` order) must be at the end of the next step.
     pub(crate) pin_targets: Vec<DVec3>,
     pub(crate) pin_starts: Vec<DVec3>,
@@ -152,6 +156,8 @@ pub struct Simulation {
     /// Position-based solvers: the constraints with their per-step constants, valid for `denominator_key`.
     pub(crate) packed: Vec<crate::position_based::PackedConstraint>,
     pub(crate) denominator_key: Option<SolverKey>,
+    /// Helper threads of the position-based grid solver (empty until a parallel step needs them).
+    pub(crate) team: TeamSlot,
     /// Grids: the constraints in row strips, which the position-based solvers project instead of the
     /// colour batches.
     pub(crate) grid_constraints: Option<GridConstraints>,
@@ -303,6 +309,7 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_anchor_positions: vec![DVec3::ZERO; n],
+            tether_pin_positions: vec![DVec3::ZERO; pinned_indices.len()],
             pin_targets,
             pinned_indices,
             triangles: model.triangles,
@@ -328,6 +335,7 @@ impl Simulation {
             cg: CgScratch::default(),
             packed: Vec::new(),
             denominator_key: None,
+            team: TeamSlot::default(),
         })
     }
 
@@ -352,42 +360,64 @@ impl Simulation {
             ..StepInfo::default()
         };
         let wind = self.params.wind;
-        for s in 0..substeps {
-            let t = self.time + s as f64 * h;
-            // `wind.substeps_per_update` > 1: the held aerodynamic forces are renewed at the first
-            // force evaluation of every k-th sub-step (k = 1 renews them at every evaluation).
-            if wind.per_substep && wind.substeps_per_update > 1 && s % wind.substeps_per_update == 0
-            {
-                self.wind_stale = true;
-            }
-            self.prescribe_pins(s, substeps, h);
-            match self.params.method {
-                Method::ExplicitEuler { .. } => self.explicit_euler_substep(h, t),
-                Method::SymplecticEuler { .. } => self.symplectic_euler_substep(h, t),
-                Method::Verlet { .. } => self.verlet_substep(h, t),
-                Method::ImplicitEuler {
-                    cg_max_iterations,
-                    cg_tolerance,
-                    ..
-                } => {
-                    let (iterations, residual) =
-                        self.implicit_euler_substep(h, t, cg_max_iterations, cg_tolerance);
-                    info.cg_iterations = info.cg_iterations.max(iterations);
-                    info.cg_relative_residual = info.cg_relative_residual.max(residual);
+        // Position-based methods on a grid run their sub-steps on a team of rayon's thread count
+        // (`TeamSlot`): about twenty short passes per sub-step, too short for rayon's hand-off.
+        let team_threads = if self.parallel()
+            && self.grid_constraints.is_some()
+            && matches!(
+                self.params.method,
+                Method::Pbd { .. } | Method::Xpbd { .. } | Method::SmallStepsXpbd { .. }
+            ) {
+            rayon::current_num_threads()
+        } else {
+            1
+        };
+        let mut team = std::mem::take(&mut self.team);
+        // From about 16 k particles (about 150 bytes each) a grid's data outgrows a core's cache, and the
+        // team's passes are claimed chunk by chunk instead of split in equal parts.
+        let claim = self.positions.len() >= TEAM_CLAIMS_FROM_PARTICLES;
+        let divergence = team.lead(team_threads, claim, || {
+            for s in 0..substeps {
+                let t = self.time + s as f64 * h;
+                // `wind.substeps_per_update` > 1: the held aerodynamic forces are renewed at the first
+                // force evaluation of every k-th sub-step (k = 1 renews them at every evaluation).
+                if wind.per_substep
+                    && wind.substeps_per_update > 1
+                    && s % wind.substeps_per_update == 0
+                {
+                    self.wind_stale = true;
                 }
-                Method::Pbd {
-                    iterations,
-                    stiffness,
-                    ..
-                } => self.position_based_substep(h, t, iterations, Some(stiffness)),
-                Method::Xpbd { iterations, .. } => {
-                    self.position_based_substep(h, t, iterations, None)
+                self.prescribe_pins(s, substeps, h);
+                match self.params.method {
+                    Method::ExplicitEuler { .. } => self.explicit_euler_substep(h, t),
+                    Method::SymplecticEuler { .. } => self.symplectic_euler_substep(h, t),
+                    Method::Verlet { .. } => self.verlet_substep(h, t),
+                    Method::ImplicitEuler {
+                        cg_max_iterations,
+                        cg_tolerance,
+                        ..
+                    } => {
+                        let (iterations, residual) =
+                            self.implicit_euler_substep(h, t, cg_max_iterations, cg_tolerance);
+                        info.cg_iterations = info.cg_iterations.max(iterations);
+                        info.cg_relative_residual = info.cg_relative_residual.max(residual);
+                    }
+                    Method::Pbd {
+                        iterations,
+                        stiffness,
+                        ..
+                    } => self.position_based_substep(h, t, iterations, Some(stiffness)),
+                    Method::Xpbd { iterations, .. } => {
+                        self.position_based_substep(h, t, iterations, None)
+                    }
+                    Method::SmallStepsXpbd { .. } => self.position_based_substep(h, t, 1, None),
                 }
-                Method::SmallStepsXpbd { .. } => self.position_based_substep(h, t, 1, None),
+                self.place_pins(s, substeps);
             }
-            self.place_pins(s, substeps);
-        }
-        if let Some(reason) = self.divergence() {
+            self.divergence()
+        });
+        self.team = team;
+        if let Some(reason) = divergence {
             self.positions.copy_from_slice(&self.backup_positions);
             self.velocities.copy_from_slice(&self.backup_velocities);
             self.cached_forces_valid = false;
@@ -483,6 +513,17 @@ impl Simulation {
                 });
             }
         }
+        if let (true, false, Some(shape)) = (wind_active, with_springs, *grid_triangulation) {
+            // The body force and the wind in one pass over the grid's rows, summed in the same order.
+            let body = BodyForce {
+                masses,
+                velocities,
+                gravity,
+                air_damping,
+            };
+            add_grid_triangle_forces(shape, triangle_forces, forces, parallel, Some(&body));
+            return;
+        }
         if !parallel {
             // One thread: scatter-add in element order. Each particle receives its terms in the same
             // order as the parallel gather below (springs, then triangles, each ascending), so both
@@ -500,7 +541,7 @@ impl Simulation {
             }
             if wind_active {
                 if let Some(shape) = *grid_triangulation {
-                    add_grid_triangle_forces(shape, triangle_forces, forces, false);
+                    add_grid_triangle_forces(shape, triangle_forces, forces, false, None);
                 } else {
                     for (tri, &f) in triangles.iter().zip(triangle_forces.iter()) {
                         for &v in tri {
@@ -534,7 +575,7 @@ impl Simulation {
             force
         });
         if let (true, Some(shape)) = (wind_active, *grid_triangulation) {
-            add_grid_triangle_forces(shape, triangle_forces, forces, parallel);
+            add_grid_triangle_forces(shape, triangle_forces, forces, parallel, None);
         }
     }
 
@@ -546,13 +587,7 @@ impl Simulation {
             let (x, v) = (self.positions[i], self.velocities[i]);
             !x.is_finite() || !v.is_finite() || v.length() > limits.max_speed
         };
-        let particle = if parallel {
-            (0..self.positions.len())
-                .into_par_iter()
-                .position_first(bad_particle)
-        } else {
-            (0..self.positions.len()).position(bad_particle)
-        };
+        let particle = first_index(self.positions.len(), parallel, bad_particle);
         if let Some(particle) = particle {
             let (x, v) = (self.positions[particle], self.velocities[particle]);
             return Some(if !x.is_finite() || !v.is_finite() {
@@ -571,13 +606,7 @@ impl Simulation {
                 - 1.0
         };
         let bad_spring = |s: usize| strain(s) > limits.max_strain;
-        let spring = if parallel {
-            (0..self.springs.len())
-                .into_par_iter()
-                .position_first(bad_spring)
-        } else {
-            (0..self.springs.len()).position(bad_spring)
-        };
+        let spring = first_index(self.springs.len(), parallel, bad_spring);
         spring.map(|spring| DivergenceReason::Strain {
             spring,
             strain: strain(spring),

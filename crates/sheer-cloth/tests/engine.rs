@@ -70,6 +70,45 @@ fn identical_bits_on_one_two_and_four_threads() {
 }
 
 #[test]
+fn identical_bits_on_a_grid_long_enough_for_claimed_chunks() {
+    // 60 × 300 particles: enough for a team of two or three to claim its passes chunk by chunk instead
+    // of splitting them in equal parts.
+    let spec = GridSpec {
+        columns: 60,
+        rows: 300,
+        width: 0.6,
+        height: 3.0,
+        ..GridSpec::default()
+    };
+    let run = |threads: usize, parallel_min_particles: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let model = ClothModel::grid(&spec)
+                .unwrap()
+                .with_hoist_pinned()
+                .unwrap();
+            let mut params = SimParams {
+                parallel_min_particles,
+                ..SimParams::default()
+            };
+            params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
+            let mut sim = Simulation::new(model, params).unwrap();
+            for _ in 0..3 {
+                sim.step(1.0 / 60.0).unwrap();
+            }
+            bits(&sim)
+        })
+    };
+    let reference = run(1, usize::MAX);
+    for threads in [2, 3] {
+        assert!(run(threads, 0) == reference, "{threads} threads differ");
+    }
+}
+
+#[test]
 fn realistic_fabric_flag_runs_at_60_hz_with_the_default_method() {
     // 1.1 m × 0.8 m, 0.1–0.3 kg/m², 60 Hz, a gusty 8 m/s wind: the case where XPBD in single
     // precision loses its corrections. Ten seconds stay finite and the fabric does not stretch.
