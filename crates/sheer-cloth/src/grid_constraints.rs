@@ -20,6 +20,7 @@ use std::ops::Range;
 use glam::DVec3;
 
 use crate::model::{GridShape, Spring, SpringKind};
+use crate::parallel::DisjointSlice;
 use crate::vectorise::by_cpu;
 
 /// How a strip's constraints sit in the particle array.
@@ -77,6 +78,10 @@ pub(crate) struct GridConstraints {
     pub rest_lengths: Vec<f64>,
     pub inverse_denominators: Vec<f64>,
     pub lambdas: Vec<f64>,
+    /// Per batch: when each of its strips lies within one particle row (the stretch and bending along
+    /// rows), the strips of row `r` as `row_strips[batch][r]` (a range of `strips`). The solver then
+    /// projects such batches row by row in one pass with the per-particle work of the same rows.
+    pub row_strips: Vec<Option<Vec<Range<usize>>>>,
 }
 
 impl GridConstraints {
@@ -224,8 +229,48 @@ impl GridConstraints {
         grid.rest_lengths = grid.springs.iter().map(|s| s.rest_length).collect();
         grid.inverse_denominators = vec![0.0; n];
         grid.lambdas = vec![0.0; n];
+        grid.row_strips = grid
+            .batches
+            .iter()
+            .map(|batch| rows_of_batch(&grid.strips[batch.clone()], batch.start, columns, rows))
+            .collect();
         Some(grid)
     }
+}
+
+/// The row of a strip whose particles all lie in one row of `columns`, if they do.
+fn row_of_strip(strip: &Strip, columns: usize) -> Option<usize> {
+    let row = strip.a / columns;
+    let within = |range: &Range<usize>| {
+        range.is_empty() || (range.start / columns == row && (range.end - 1) / columns == row)
+    };
+    strip.particle_ranges().iter().all(within).then_some(row)
+}
+
+/// For a batch whose strips (the first at index `first` of all strips) each lie within one row, in
+/// ascending rows: the strips of each of the `rows` rows (empty for a row without any); `None` for any
+/// other batch.
+fn rows_of_batch(
+    strips: &[Strip],
+    first: usize,
+    columns: usize,
+    rows: usize,
+) -> Option<Vec<Range<usize>>> {
+    let mut by_row = vec![0..0; rows];
+    let mut previous_row = 0;
+    for (k, strip) in strips.iter().enumerate() {
+        let row = row_of_strip(strip, columns)?;
+        if row < previous_row {
+            return None;
+        }
+        let index = first + k;
+        if by_row[row].is_empty() {
+            by_row[row] = index..index;
+        }
+        by_row[row].end = index + 1;
+        previous_row = row;
+    }
+    Some(by_row)
 }
 
 /// Per-sub-step constants of one constraint family: `(α̃, γ)` of XPBD (Macklin et al. 2016 eqs. (18) and
@@ -243,10 +288,11 @@ pub(crate) struct FamilyConstants {
 /// `inverse_denominator`). Nothing moves when the constraint is inactive (`inverse_denominator` = 0: a
 /// switched-off family or both ends pinned) or the ends coincide (no gradient direction). With
 /// `MULTIPLIERS` the accumulated multiplier λ is read and updated; without it λ is taken as 0 (one
-/// iteration: it is always 0 when read).
+/// iteration: it is always 0 when read). Without `DAMPED` (a family with no damping, γ = 0) the damping
+/// term is left out, and with it the start positions it needs (a sixth of the bytes a projection reads).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool>(
+pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
     x_a: &mut DVec3,
     x_b: &mut DVec3,
     previous_a: DVec3,
@@ -265,10 +311,14 @@ pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool>(
     let correction = if PBD {
         -constraint * inverse_denominator
     } else {
-        let rate = gradient.dot((*x_a - previous_a) - (*x_b - previous_b));
         let lambda = if MULTIPLIERS { *lambda } else { 0.0 };
-        (-constraint - family.scaled_compliance * lambda - family.gamma * rate)
-            * inverse_denominator
+        let elastic = -constraint - family.scaled_compliance * lambda;
+        if DAMPED {
+            let rate = gradient.dot((*x_a - previous_a) - (*x_b - previous_b));
+            (elastic - family.gamma * rate) * inverse_denominator
+        } else {
+            elastic * inverse_denominator
+        }
     };
     // Selected, not branched on, so that the strip loops vectorise.
     let active = inverse_denominator != 0.0 && length != 0.0;
@@ -285,9 +335,86 @@ pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool>(
     *x_b -= inverse_mass_b * step;
 }
 
+/// Projects one strip of a batch: `positions`, `previous` (start positions) and `inverse_masses` are the
+/// whole cloth's; `rest_lengths`, `inverse_denominators` and `lambdas` the strip's own constraints'.
+///
+/// # Safety
+/// No other thread may touch the strip's particles ([`Strip::particle_ranges`]) in `positions` or
+/// write them in `previous` while it runs.
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
+    strip: &Strip,
+    positions: &DisjointSlice<'_, DVec3>,
+    previous: &DisjointSlice<'_, DVec3>,
+    inverse_masses: &[f64],
+    rest_lengths: &[f64],
+    inverse_denominators: &[f64],
+    lambdas: &mut [f64],
+    family: FamilyConstants,
+) {
+    let [first, second] = strip.particle_ranges();
+    match strip.layout {
+        Layout::Apart { .. } => {
+            // SAFETY: exclusive by the caller's contract; the two ranges do not overlap
+            // (`Layout::Apart` has b ≥ a + count).
+            let (x_a, x_b, previous_a, previous_b) = unsafe {
+                (
+                    positions.slice_mut(first.clone()),
+                    positions.slice_mut(second.clone()),
+                    previous.slice(first.clone()),
+                    previous.slice(second.clone()),
+                )
+            };
+            project_apart::<PBD, MULTIPLIERS, DAMPED>(
+                x_a,
+                x_b,
+                previous_a,
+                previous_b,
+                &inverse_masses[first],
+                &inverse_masses[second],
+                rest_lengths,
+                inverse_denominators,
+                lambdas,
+                family,
+            );
+        }
+        Layout::Along { half } => {
+            // SAFETY: exclusive by the caller's contract.
+            let (x, previous) = unsafe {
+                (
+                    positions.slice_mut(first.clone()),
+                    previous.slice(first.clone()),
+                )
+            };
+            let w = &inverse_masses[first];
+            if half == 1 {
+                project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
+                    x.as_chunks_mut().0,
+                    previous.as_chunks().0,
+                    w.as_chunks().0,
+                    rest_lengths.as_chunks().0,
+                    inverse_denominators.as_chunks().0,
+                    lambdas.as_chunks_mut().0,
+                    family,
+                );
+            } else {
+                project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
+                    x.as_chunks_mut().0,
+                    previous.as_chunks().0,
+                    w.as_chunks().0,
+                    rest_lengths.as_chunks().0,
+                    inverse_denominators.as_chunks().0,
+                    lambdas.as_chunks_mut().0,
+                    family,
+                );
+            }
+        }
+    }
+}
+
 by_cpu! {
     /// Projects an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`.
-    pub(crate) fn project_apart<const PBD: bool, const MULTIPLIERS: bool>(
+    pub(crate) fn project_apart<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
         x_a: &mut [DVec3],
         x_b: &mut [DVec3],
         previous_a: &[DVec3],
@@ -306,7 +433,7 @@ by_cpu! {
         let (rest_lengths, inverse_denominators) = (&rest_lengths[..n], &inverse_denominators[..n]);
         let lambdas = &mut lambdas[..n];
         for k in 0..n {
-            project::<PBD, MULTIPLIERS>(
+            project::<PBD, MULTIPLIERS, DAMPED>(
                 &mut x_a[k],
                 &mut x_b[k],
                 previous_a[k],
@@ -325,7 +452,7 @@ by_cpu! {
 by_cpu! {
     /// Projects an along strip of `HALF` interleaved constraints per chunk of `CHUNK = 2·HALF` particles:
     /// constraint `m·HALF + j` joins `x[m][j]` and `x[m][j + HALF]`.
-    pub(crate) fn project_along<const PBD: bool, const MULTIPLIERS: bool, const HALF: usize, const CHUNK: usize>(
+    pub(crate) fn project_along<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool, const HALF: usize, const CHUNK: usize>(
         x: &mut [[DVec3; CHUNK]],
         previous: &[[DVec3; CHUNK]],
         inverse_masses: &[[f64; CHUNK]],
@@ -341,7 +468,7 @@ by_cpu! {
         for m in 0..n {
             let (low, high) = x[m].split_at_mut(HALF);
             for j in 0..HALF {
-                project::<PBD, MULTIPLIERS>(
+                project::<PBD, MULTIPLIERS, DAMPED>(
                     &mut low[j],
                     &mut high[j],
                     previous[m][j],
@@ -472,7 +599,7 @@ mod tests {
         let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
             v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
         };
-        fn check<const PBD: bool, const MULTIPLIERS: bool>(
+        fn check<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
             x: &[DVec3],
             previous: &[DVec3],
             w: &[f64],
@@ -487,7 +614,7 @@ mod tests {
             let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
             for k in 0..half {
                 let (low, high) = expected.split_at_mut(half);
-                project::<PBD, MULTIPLIERS>(
+                project::<PBD, MULTIPLIERS, DAMPED>(
                     &mut low[k],
                     &mut high[k],
                     previous[k],
@@ -502,7 +629,7 @@ mod tests {
             }
             let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
             let (low, high) = got.split_at_mut(half);
-            project_apart::<PBD, MULTIPLIERS>(
+            project_apart::<PBD, MULTIPLIERS, DAMPED>(
                 low,
                 high,
                 &previous[..half],
@@ -520,7 +647,7 @@ mod tests {
             let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
             for m in 0..half {
                 let (low, high) = expected.split_at_mut(2 * m + 1);
-                project::<PBD, MULTIPLIERS>(
+                project::<PBD, MULTIPLIERS, DAMPED>(
                     &mut low[2 * m],
                     &mut high[0],
                     previous[2 * m],
@@ -534,7 +661,7 @@ mod tests {
                 );
             }
             let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
-            project_along::<PBD, MULTIPLIERS, 1, 2>(
+            project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
                 got.as_chunks_mut().0,
                 previous.as_chunks().0,
                 w.as_chunks().0,
@@ -551,7 +678,7 @@ mod tests {
                 let (m, j) = (c / 2, c % 2);
                 let a = 4 * m + j;
                 let (low, high) = expected.split_at_mut(a + 2);
-                project::<PBD, MULTIPLIERS>(
+                project::<PBD, MULTIPLIERS, DAMPED>(
                     &mut low[a],
                     &mut high[0],
                     previous[a],
@@ -565,7 +692,7 @@ mod tests {
                 );
             }
             let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0);
-            project_along::<PBD, MULTIPLIERS, 2, 4>(
+            project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
                 got.as_chunks_mut().0,
                 previous.as_chunks().0,
                 w.as_chunks().0,
@@ -578,8 +705,60 @@ mod tests {
             assert_eq!(got_lambdas, expected_lambdas);
             assert_ne!(bits(&got), bits(x), "the constraints moved the particles");
         }
-        check::<true, false>(&x, &previous, &w, &rest, &denominators, family, &bits);
-        check::<false, false>(&x, &previous, &w, &rest, &denominators, family, &bits);
-        check::<false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
+        check::<true, false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
+        check::<false, false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
+        check::<false, true, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
+        let undamped = FamilyConstants {
+            gamma: 0.0,
+            ..family
+        };
+        check::<false, false, false>(&x, &previous, &w, &rest, &denominators, undamped, &bits);
+        check::<false, true, false>(&x, &previous, &w, &rest, &denominators, undamped, &bits);
+    }
+
+    /// Leaving the damping term out changes nothing when the family has none (γ = 0), and something
+    /// when it has.
+    #[test]
+    fn the_undamped_projection_is_the_damped_one_at_zero_damping() {
+        let project_with = |damped: bool, gamma: f64| {
+            let (mut a, mut b) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.0213, 0.001, -0.002));
+            let (start_a, start_b) = (DVec3::new(1e-4, 0.0, 0.0), DVec3::new(0.0208, 0.0, 0.0));
+            let family = FamilyConstants {
+                scaled_compliance: 1440.0,
+                gamma,
+            };
+            let mut lambda = 2e-6;
+            let args = (1.6e4, 1.7e4, 0.0175, 1.0 / 3.5e4);
+            if damped {
+                project::<false, true, true>(
+                    &mut a,
+                    &mut b,
+                    start_a,
+                    start_b,
+                    args.0,
+                    args.1,
+                    args.2,
+                    args.3,
+                    &mut lambda,
+                    family,
+                );
+            } else {
+                project::<false, true, false>(
+                    &mut a,
+                    &mut b,
+                    start_a,
+                    start_b,
+                    args.0,
+                    args.1,
+                    args.2,
+                    args.3,
+                    &mut lambda,
+                    family,
+                );
+            }
+            (a, b, lambda)
+        };
+        assert_eq!(project_with(true, 0.0), project_with(false, 0.0));
+        assert_ne!(project_with(true, 0.3), project_with(false, 0.3));
     }
 }

@@ -128,37 +128,64 @@ pub(crate) fn add_grid_triangle_forces(
     body: Option<&BodyForce>,
 ) {
     let columns = shape.columns;
-    let (cells, _) = shares.as_chunks::<2>();
-    let cells_per_row = columns - 1;
-    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
     assert_eq!(forces.len(), columns * shape.rows);
-    let row = |row: usize, forces: &mut [DVec3]| {
-        // The cells above and below particle row `row`.
-        let above = row
-            .checked_sub(1)
-            .map(|r| &cells[r * cells_per_row..(r + 1) * cells_per_row]);
-        let below =
-            (row + 1 < shape.rows).then(|| &cells[row * cells_per_row..(row + 1) * cells_per_row]);
-        add_to_particle_row(above, below, forces);
-    };
     let forces = DisjointSlice::new(forces);
     parts(shape.rows, parallel, 8, |rows| {
         for r in rows {
             let particles = r * columns..(r + 1) * columns;
             // SAFETY: the parts of the rows are disjoint.
             let forces = unsafe { forces.slice_mut(particles.clone()) };
-            if let Some(body) = body {
-                body_force_row(
+            match body {
+                Some(body) => row_forces(
+                    shape,
+                    Some(shares),
+                    r,
                     &body.masses[particles.clone()],
                     &body.velocities[particles],
                     body.gravity,
                     body.air_damping,
                     forces,
-                );
+                ),
+                None => add_row_shares(shape, shares, r, forces),
             }
-            row(r, forces);
         }
     });
+}
+
+/// The forces on particle row `row` (N) into `forces`: the body force `m (g − c v)` from the row's
+/// `masses` (kg) and `velocities` (m/s), gravity (m/s²) and air damping (1/s), plus, with `shares`, each
+/// particle's triangles' corner shares in ascending triangle order — what [`add_grid_triangle_forces`]
+/// with a body force gives that row.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn row_forces(
+    shape: GridShape,
+    shares: Option<&[DVec3]>,
+    row: usize,
+    masses: &[f64],
+    velocities: &[DVec3],
+    gravity: DVec3,
+    air_damping: f64,
+    forces: &mut [DVec3],
+) {
+    body_force_row(masses, velocities, gravity, air_damping, forces);
+    if let Some(shares) = shares {
+        add_row_shares(shape, shares, row, forces);
+    }
+}
+
+/// Adds the corner shares of the triangles around particle row `row` (`shares` indexed like
+/// [`GridShape::triangles`]) to that row's `forces`.
+fn add_row_shares(shape: GridShape, shares: &[DVec3], row: usize, forces: &mut [DVec3]) {
+    let (cells, _) = shares.as_chunks::<2>();
+    let cells_per_row = shape.columns - 1;
+    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
+    // The cells above and below particle row `row`.
+    let above = row
+        .checked_sub(1)
+        .map(|r| &cells[r * cells_per_row..(r + 1) * cells_per_row]);
+    let below =
+        (row + 1 < shape.rows).then(|| &cells[row * cells_per_row..(row + 1) * cells_per_row]);
+    add_to_particle_row(above, below, forces);
 }
 
 by_cpu! {

@@ -5,7 +5,7 @@
 //! count. Nothing is scatter-added with atomics.
 //!
 //! Passes go to rayon's pool, or, inside [`TeamSlot::lead`], to a *team*: threads that belong to one
-//! simulation and spin between passes. A small cloth's sub-step is sixteen passes of a few microseconds
+//! simulation and spin between passes. A small cloth's sub-step is eleven passes of a few microseconds
 //! each; rayon's workers fall asleep between them and take longer to wake than a pass takes, while a
 //! spinning team hands a pass over at the cost of a few cache-line transfers (the crate README has the
 //! measurements).
@@ -410,6 +410,10 @@ impl<'a, T: Copy> DisjointSlice<'a, T> {
         }
     }
 
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
     /// # Safety
     /// No other thread may write index `i` concurrently.
     #[inline]
@@ -430,6 +434,17 @@ impl<'a, T: Copy> DisjointSlice<'a, T> {
         assert!(range.start <= range.end && range.end <= self.len);
         // SAFETY: in bounds (checked above); exclusive by the caller's contract.
         unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+    }
+
+    /// The elements in `range` as a shared slice.
+    ///
+    /// # Safety
+    /// No thread may write an index of `range` while the slice lives.
+    #[inline]
+    pub(crate) unsafe fn slice(&self, range: std::ops::Range<usize>) -> &[T] {
+        assert!(range.start <= range.end && range.end <= self.len);
+        // SAFETY: in bounds (checked above); unwritten by the caller's contract.
+        unsafe { std::slice::from_raw_parts(self.ptr.add(range.start), range.len()) }
     }
 
     /// # Safety

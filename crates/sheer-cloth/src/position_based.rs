@@ -5,17 +5,21 @@
 //! Per sub-step: external forces into velocities, predict positions, project the distance constraints
 //! batch by batch (Gauss–Seidel across batches, independent within a batch, so a batch can run in
 //! parallel with the same result), then velocities from the position change. The batches are a grid's
-//! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. In parallel, a grid's
-//! passes go to the simulation's team of threads ([`parts`]), a mesh's to rayon.
+//! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a grid the batches
+//! along rows share a pass over the rows with the forces and the prediction before them, or with the
+//! attachments and the velocities after them. In parallel, a grid's passes go to the simulation's team
+//! of threads ([`parts`]), a mesh's to rayon.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::grid_constraints::{
-    FamilyConstants, GridConstraints, Layout, Strip, project, project_along, project_apart,
-};
+use std::ops::Range;
+
+use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strip};
+use crate::grid_wind::row_forces as grid_row_forces;
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts};
+use crate::params::SimParams;
 use crate::sim::{Simulation, family_index};
 use crate::vectorise::by_cpu;
 
@@ -50,9 +54,17 @@ impl Simulation {
         iterations: u32,
         pbd_stiffness: Option<f64>,
     ) {
-        self.compute_forces(t, false);
+        let on_grid = self.grid_constraints.is_some();
+        // A grid sums each row's forces in its first pass over the rows when it can.
+        let row_forces = if on_grid {
+            self.prepare_row_forces(t)
+        } else {
+            self.compute_forces(t, false);
+            None
+        };
         let parallel = self.parallel();
-        {
+        if !on_grid {
+            // A grid predicts row by row inside its first constraint pass (`project_grid_constraints`).
             let Simulation {
                 positions,
                 velocities,
@@ -163,16 +175,33 @@ impl Simulation {
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
         // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
         let multipliers = iterations > 1 && !is_pbd;
-        let inverse_h = 1.0 / h;
-        match (is_pbd, multipliers) {
-            (true, _) => {
-                self.project_constraints::<true, false>(iterations, family_constants, inverse_h)
+        match (is_pbd, multipliers, on_grid) {
+            (true, _, true) => self.project_grid_constraints::<true, false>(
+                h,
+                iterations,
+                family_constants,
+                row_forces,
+            ),
+            (false, true, true) => self.project_grid_constraints::<false, true>(
+                h,
+                iterations,
+                family_constants,
+                row_forces,
+            ),
+            (false, false, true) => self.project_grid_constraints::<false, false>(
+                h,
+                iterations,
+                family_constants,
+                row_forces,
+            ),
+            (true, _, false) => {
+                self.project_mesh_constraints::<true, false>(h, iterations, family_constants)
             }
-            (false, true) => {
-                self.project_constraints::<false, true>(iterations, family_constants, inverse_h)
+            (false, true, false) => {
+                self.project_mesh_constraints::<false, true>(h, iterations, family_constants)
             }
-            (false, false) => {
-                self.project_constraints::<false, false>(iterations, family_constants, inverse_h)
+            (false, false, false) => {
+                self.project_mesh_constraints::<false, false>(h, iterations, family_constants)
             }
         }
         self.cached_forces_valid = false;
@@ -217,16 +246,103 @@ by_cpu! {
     }
 }
 
+/// The long-range attachments of a sweep: each particle's anchor (an index into `pin_positions`) and
+/// tether length (m), where the pinned particles are, and scratch for each particle's anchor position.
+struct Tethers<'a> {
+    anchors: &'a [u32],
+    lengths: &'a [f64],
+    pin_positions: &'a [DVec3],
+    scratch: DisjointSlice<'a, DVec3>,
+}
+
+impl<'a> Tethers<'a> {
+    /// The attachments of a sub-step whose predicted positions are `positions`, if it has any. The
+    /// pinned particles' positions are gathered here into `pin_positions`: they have inverse mass 0, so
+    /// no projection moves them, and gathered once they stay right for the sub-step while no pass reads a
+    /// position that another part writes.
+    fn of_substep(
+        simulation_params: &SimParams,
+        pinned_indices: &[u32],
+        positions: &[DVec3],
+        anchors: &'a [u32],
+        lengths: &'a [f64],
+        pin_positions: &'a mut [DVec3],
+        scratch: &'a mut [DVec3],
+    ) -> Option<Tethers<'a>> {
+        if !simulation_params.long_range_attachments || pinned_indices.is_empty() {
+            return None;
+        }
+        for (anchor, &i) in pin_positions.iter_mut().zip(pinned_indices) {
+            *anchor = positions[i as usize];
+        }
+        Some(Tethers {
+            anchors,
+            lengths,
+            pin_positions,
+            scratch: DisjointSlice::new(scratch),
+        })
+    }
+
+    /// Pulls the particles in `range` back within their tethers.
+    ///
+    /// # Safety
+    /// No other thread may touch `range` of `positions` or of the scratch while this runs.
+    unsafe fn apply(&self, range: Range<usize>, positions: &DisjointSlice<'_, DVec3>) {
+        // SAFETY: exclusive by the caller's contract.
+        let (x, anchors) = unsafe {
+            (
+                positions.slice_mut(range.clone()),
+                self.scratch.slice_mut(range.clone()),
+            )
+        };
+        // Each particle's anchor is copied next to it first: the attachment loop then reads contiguous
+        // memory and vectorises (a gather inside it kept the compiler from it).
+        for (anchor, &k) in anchors.iter_mut().zip(&self.anchors[range.clone()]) {
+            *anchor = self.pin_positions[k as usize];
+        }
+        apply_tethers(x, anchors, &self.lengths[range]);
+    }
+}
+
+/// The end of a sweep for the particles in `range`: the long-range attachments if any, then on the last
+/// sweep the velocities from the position change over the sub-step (`inverse_h = 1/h`, 1/s).
+///
+/// # Safety
+/// No other thread may touch `range` of `positions`, `velocities` or the tethers' scratch, or write it
+/// in `previous`, while this runs.
+unsafe fn end_sweep(
+    range: Range<usize>,
+    tethers: Option<&Tethers<'_>>,
+    velocities: Option<(&DisjointSlice<'_, DVec3>, f64)>,
+    positions: &DisjointSlice<'_, DVec3>,
+    previous: &DisjointSlice<'_, DVec3>,
+) {
+    // SAFETY (both blocks): by the caller's contract.
+    if let Some(tethers) = tethers {
+        unsafe { tethers.apply(range.clone(), positions) };
+    }
+    if let Some((velocities, inverse_h)) = velocities {
+        unsafe {
+            velocities_from_positions(
+                inverse_h,
+                positions.slice(range.clone()),
+                previous.slice(range.clone()),
+                velocities.slice_mut(range),
+            )
+        }
+    }
+}
+
 impl Simulation {
-    /// `iterations` Gauss–Seidel sweeps over the constraints, batch by batch, each followed by the
-    /// long-range attachments, then the velocities from the position change (`inverse_h = 1/h`, 1/s) in
-    /// the same pass as the last attachments. Grids go strip by strip ([`GridConstraints`]), other meshes
-    /// constraint by constraint in their colour batches; both project with [`project`].
-    fn project_constraints<const PBD: bool, const MULTIPLIERS: bool>(
+    /// `iterations` Gauss–Seidel sweeps over a general mesh's constraints, colour batch by colour batch,
+    /// each followed by the long-range attachments, then the velocities from the position change over
+    /// the sub-step `h` (s) in the same pass as the last attachments. Grids go
+    /// [`project_grid_constraints`](Simulation::project_grid_constraints); both project with [`project`].
+    fn project_mesh_constraints<const PBD: bool, const MULTIPLIERS: bool>(
         &mut self,
+        h: f64,
         iterations: u32,
         family: [FamilyConstants; 3],
-        inverse_h: f64,
     ) {
         let parallel = self.parallel();
         let Simulation {
@@ -239,24 +355,30 @@ impl Simulation {
             packed,
             tether_anchors,
             tether_lengths,
-            tether_anchor_positions: anchors,
-            tether_pin_positions: pin_positions,
+            tether_anchor_positions,
+            tether_pin_positions,
             pinned_indices,
             params,
             inverse_masses,
-            grid_constraints,
             ..
         } = self;
         let particle_count = positions.len();
         let inverse_masses = &inverse_masses[..];
-        let long_range_attachments = params.long_range_attachments && !pinned_indices.is_empty();
         if MULTIPLIERS {
             lambdas.fill(0.0);
-            if let Some(grid) = grid_constraints.as_mut() {
-                grid.lambdas.fill(0.0);
-            }
         }
-        let previous = &previous_positions[..];
+        let tethers = Tethers::of_substep(
+            params,
+            pinned_indices,
+            positions,
+            tether_anchors,
+            tether_lengths,
+            tether_pin_positions,
+            tether_anchor_positions,
+        );
+        let previous = DisjointSlice::new(previous_positions);
+        // SAFETY: no pass writes the start positions.
+        let start = unsafe { previous.slice(0..particle_count) };
         let positions = DisjointSlice::new(positions);
         let lambdas = DisjointSlice::new(lambdas);
         let packed = &packed[..];
@@ -268,11 +390,12 @@ impl Simulation {
             unsafe {
                 let (mut x_a, mut x_b) = (positions.get(a), positions.get(b));
                 let mut lambda = if MULTIPLIERS { lambdas.get(c) } else { 0.0 };
-                project::<PBD, MULTIPLIERS>(
+                // The damping term stays in (with γ = 0 it multiplies out): meshes are not the hot path.
+                project::<PBD, MULTIPLIERS, true>(
                     &mut x_a,
                     &mut x_b,
-                    previous[a],
-                    previous[b],
+                    start[a],
+                    start[b],
                     inverse_masses[a],
                     inverse_masses[b],
                     k.rest_length,
@@ -288,130 +411,212 @@ impl Simulation {
             }
         };
         let velocities = DisjointSlice::new(velocities);
-        let anchors = DisjointSlice::new(anchors);
         for iteration in 0..iterations {
-            if let Some(grid) = grid_constraints.as_mut() {
-                let GridConstraints {
-                    springs,
-                    strips,
-                    batches,
-                    rest_lengths,
-                    inverse_denominators,
-                    lambdas,
-                } = grid;
-                let lambdas = DisjointSlice::new(lambdas);
-                let project_strip = |strip: &Strip| {
-                    let family = family[family_index(springs[strip.first].kind)];
-                    let constraints = strip.first..strip.first + strip.count;
-                    let (rest, inverse_denominators) = (
-                        &rest_lengths[constraints.clone()],
-                        &inverse_denominators[constraints.clone()],
-                    );
-                    // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
-                    // `grid_strips_*` tests), each strip owns its constraints' multipliers, and one
-                    // strip's two ranges do not overlap (`Layout::Apart` has b ≥ a + count).
-                    unsafe {
-                        let lambdas = lambdas.slice_mut(constraints);
-                        let [first, second] = strip.particle_ranges();
-                        match strip.layout {
-                            Layout::Apart { .. } => {
-                                project_apart::<PBD, MULTIPLIERS>(
-                                    positions.slice_mut(first.clone()),
-                                    positions.slice_mut(second.clone()),
-                                    &previous[first.clone()],
-                                    &previous[second.clone()],
-                                    &inverse_masses[first],
-                                    &inverse_masses[second],
-                                    rest,
-                                    inverse_denominators,
-                                    lambdas,
-                                    family,
-                                );
-                            }
-                            Layout::Along { half } => {
-                                let x = positions.slice_mut(first.clone());
-                                let (previous, w) =
-                                    (&previous[first.clone()], &inverse_masses[first]);
-                                if half == 1 {
-                                    project_along::<PBD, MULTIPLIERS, 1, 2>(
-                                        x.as_chunks_mut().0,
-                                        previous.as_chunks().0,
-                                        w.as_chunks().0,
-                                        rest.as_chunks().0,
-                                        inverse_denominators.as_chunks().0,
-                                        lambdas.as_chunks_mut().0,
-                                        family,
-                                    );
-                                } else {
-                                    project_along::<PBD, MULTIPLIERS, 2, 4>(
-                                        x.as_chunks_mut().0,
-                                        previous.as_chunks().0,
-                                        w.as_chunks().0,
-                                        rest.as_chunks().0,
-                                        inverse_denominators.as_chunks().0,
-                                        lambdas.as_chunks_mut().0,
-                                        family,
-                                    );
-                                }
-                            }
-                        }
-                    }
-                };
-                for batch in batches.iter() {
-                    let strips = &strips[batch.clone()];
-                    parts(strips.len(), parallel, 4, |range| {
-                        strips[range].iter().for_each(project_strip)
-                    });
+            for range in colours.iter() {
+                if parallel && range.len() >= MIN_PARALLEL_BATCH {
+                    range
+                        .clone()
+                        .into_par_iter()
+                        .with_min_len(256)
+                        .for_each(solve);
+                } else {
+                    range.clone().for_each(solve);
                 }
-            } else {
-                for range in colours.iter() {
-                    if parallel && range.len() >= MIN_PARALLEL_BATCH {
-                        range
-                            .clone()
-                            .into_par_iter()
-                            .with_min_len(256)
-                            .for_each(solve);
-                    } else {
-                        range.clone().for_each(solve);
-                    }
-                }
-                uncoloured.clone().for_each(solve);
             }
+            uncoloured.clone().for_each(solve);
             let last = iteration + 1 == iterations;
-            if long_range_attachments {
-                // The anchors are pinned (inverse mass 0): no projection moves them. Their positions are
-                // gathered once here, so that the parallel pass below reads no position another part
-                // writes.
-                for (anchor, &i) in pin_positions.iter_mut().zip(pinned_indices.iter()) {
-                    // SAFETY: no pass is running.
-                    *anchor = unsafe { positions.get(i as usize) };
-                }
-            }
-            let pin_positions = &pin_positions[..];
-            if long_range_attachments || last {
+            let velocities = last.then_some((&velocities, 1.0 / h));
+            if tethers.is_some() || last {
                 parts(particle_count, parallel, PARTICLE_GRAIN, |range| {
                     // SAFETY: the parts are disjoint.
-                    unsafe {
-                        let x = positions.slice_mut(range.clone());
-                        if long_range_attachments {
-                            // Each particle's anchor is copied next to it first: the attachment loop
-                            // then reads contiguous memory and vectorises (a gather inside it kept the
-                            // compiler from it).
-                            let anchors = anchors.slice_mut(range.clone());
-                            for (anchor, &k) in
-                                anchors.iter_mut().zip(&tether_anchors[range.clone()])
-                            {
-                                *anchor = pin_positions[k as usize];
-                            }
-                            apply_tethers(x, anchors, &tether_lengths[range.clone()]);
-                        }
-                        if last {
-                            let v = velocities.slice_mut(range.clone());
-                            velocities_from_positions(inverse_h, x, &previous[range], v);
-                        }
-                    }
+                    unsafe { end_sweep(range, tethers.as_ref(), velocities, &positions, &previous) }
                 });
             }
+        }
+    }
+
+    /// As [`project_mesh_constraints`](Simulation::project_mesh_constraints), for a grid: strip by
+    /// strip in its twelve batches ([`GridConstraints`]), the sub-step's forces and prediction over `h`
+    /// (s) first. The batches within rows that open and close a sweep (bending and stretch along rows)
+    /// share a pass over the rows with the per-particle work next to them (the forces and the prediction;
+    /// the attachments and the velocities): every row is independent there, so each part of the team
+    /// keeps its rows from one to the next, and a sub-step takes eleven passes instead of sixteen, with
+    /// the same arithmetic in the same order for every particle (tested).
+    ///
+    /// `row_forces` ([`Simulation::prepare_row_forces`]): `Some` when the first pass sums each row's
+    /// forces itself (`true`: with the wind's shares), `None` when they are in `self.forces` already.
+    fn project_grid_constraints<const PBD: bool, const MULTIPLIERS: bool>(
+        &mut self,
+        h: f64,
+        iterations: u32,
+        family: [FamilyConstants; 3],
+        row_forces: Option<bool>,
+    ) {
+        let parallel = self.parallel();
+        let Simulation {
+            positions,
+            velocities,
+            previous_positions,
+            forces,
+            tether_anchors,
+            tether_lengths,
+            tether_anchor_positions,
+            tether_pin_positions,
+            pinned_indices,
+            params,
+            inverse_masses,
+            masses,
+            triangle_forces,
+            grid: Some(shape),
+            grid_constraints: Some(grid),
+            ..
+        } = self
+        else {
+            unreachable!("project_grid_constraints on a simulation without grid constraints");
+        };
+        let shape = *shape;
+        let (columns, rows) = (shape.columns, shape.rows);
+        let inverse_masses = &inverse_masses[..];
+        let forces = DisjointSlice::new(forces);
+        let shares = row_forces.unwrap_or(false).then_some(&triangle_forces[..]);
+        let (gravity, air_damping) = (params.gravity, params.air_damping);
+        let GridConstraints {
+            springs,
+            strips,
+            batches,
+            rest_lengths,
+            inverse_denominators,
+            lambdas,
+            row_strips,
+        } = grid;
+        if MULTIPLIERS {
+            lambdas.fill(0.0);
+        }
+        // The batches within rows that open a sweep, those that close it, and the rest.
+        let opening = row_strips.iter().take_while(|r| r.is_some()).count();
+        let closing = row_strips[opening..]
+            .iter()
+            .rev()
+            .take_while(|r| r.is_some())
+            .count();
+        let (middle, closing) = (
+            opening..batches.len() - closing,
+            batches.len() - closing..batches.len(),
+        );
+        let lambdas = DisjointSlice::new(lambdas);
+        let positions_slice = DisjointSlice::new(positions);
+        let previous = DisjointSlice::new(previous_positions);
+        let velocities = DisjointSlice::new(velocities);
+        let positions = &positions_slice;
+        let project_one = |strip: &Strip| {
+            let family = family[family_index(springs[strip.first].kind)];
+            let constraints = strip.first..strip.first + strip.count;
+            let (rest, inverse_denominators) = (
+                &rest_lengths[constraints.clone()],
+                &inverse_denominators[constraints.clone()],
+            );
+            // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
+            // `grid_strips_*` tests), a pass over rows gives each row to one part, and each strip owns
+            // its constraints' multipliers.
+            unsafe {
+                let lambdas = lambdas.slice_mut(constraints);
+                let project = if family.gamma != 0.0 {
+                    project_strip::<PBD, MULTIPLIERS, true>
+                } else {
+                    project_strip::<PBD, MULTIPLIERS, false>
+                };
+                project(
+                    strip,
+                    positions,
+                    &previous,
+                    inverse_masses,
+                    rest,
+                    inverse_denominators,
+                    lambdas,
+                    family,
+                );
+            }
+        };
+        // The within-row batches `group` on row `row`.
+        let project_row = |group: Range<usize>, row: usize| {
+            for rows_of_batch in row_strips[group].iter().flatten() {
+                strips[rows_of_batch[row].clone()]
+                    .iter()
+                    .for_each(project_one);
+            }
+        };
+        let particles_of = |row: usize| row * columns..(row + 1) * columns;
+        let row_grain = PARTICLE_GRAIN.div_ceil(columns);
+        // First pass: the forces (unless summed already), the prediction, then the opening batches,
+        // row by row.
+        parts(rows, parallel, row_grain, |rows| {
+            for row in rows {
+                let range = particles_of(row);
+                // SAFETY: the parts are disjoint, and so are their rows.
+                unsafe {
+                    if row_forces.is_some() {
+                        grid_row_forces(
+                            shape,
+                            shares,
+                            row,
+                            &masses[range.clone()],
+                            velocities.slice(range.clone()),
+                            gravity,
+                            air_damping,
+                            forces.slice_mut(range.clone()),
+                        );
+                    }
+                    predict_positions(
+                        h,
+                        &inverse_masses[range.clone()],
+                        forces.slice(range.clone()),
+                        positions.slice_mut(range.clone()),
+                        velocities.slice_mut(range.clone()),
+                        previous.slice_mut(range),
+                    )
+                };
+                project_row(0..opening, row);
+            }
+        });
+        let tethers = Tethers::of_substep(
+            params,
+            pinned_indices,
+            // SAFETY: no pass is running.
+            unsafe { positions.slice(0..positions.len()) },
+            tether_anchors,
+            tether_lengths,
+            tether_pin_positions,
+            tether_anchor_positions,
+        );
+        for iteration in 0..iterations {
+            for batch in middle.clone() {
+                let strips = &strips[batches[batch].clone()];
+                parts(strips.len(), parallel, 4, |range| {
+                    strips[range].iter().for_each(project_one)
+                });
+            }
+            let last = iteration + 1 == iterations;
+            let velocities = last.then_some((&velocities, 1.0 / h));
+            // Last pass of the sweep: the closing batches, the attachments and, on the last sweep, the
+            // velocities, else the next sweep's opening batches, row by row.
+            parts(rows, parallel, row_grain, |rows| {
+                for row in rows {
+                    project_row(closing.clone(), row);
+                    // SAFETY: the parts are disjoint, and so are their rows.
+                    unsafe {
+                        end_sweep(
+                            particles_of(row),
+                            tethers.as_ref(),
+                            velocities,
+                            positions,
+                            &previous,
+                        )
+                    };
+                    if !last {
+                        project_row(0..opening, row);
+                    }
+                }
+            });
         }
     }
 }
@@ -432,6 +637,70 @@ by_cpu! {
             } else {
                 x
             };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{ClothModel, GridSpec};
+    use crate::params::{Method, SimParams};
+    use crate::sim::Simulation;
+    use glam::DVec3;
+
+    /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
+    /// the batches along rows, the attachments and the velocities in another) give the bits of the same
+    /// work done pass by pass: batch by batch, and the forces summed beforehand by the general path.
+    #[test]
+    fn the_row_passes_give_the_bits_of_batch_by_batch() {
+        for method in [
+            Method::SmallStepsXpbd { substeps: 20 },
+            Method::Xpbd {
+                substeps: 2,
+                iterations: 5,
+            },
+            Method::Pbd {
+                substeps: 2,
+                iterations: 5,
+                stiffness: 1.0,
+            },
+        ] {
+            let run = |batch_by_batch: bool, forces_beforehand: bool| {
+                let spec = GridSpec {
+                    columns: 23,
+                    rows: 13,
+                    ..GridSpec::default()
+                };
+                let model = ClothModel::grid(&spec)
+                    .unwrap()
+                    .with_hoist_pinned()
+                    .unwrap();
+                let mut params = SimParams {
+                    method,
+                    ..SimParams::default()
+                };
+                params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
+                let mut sim = Simulation::new(model, params).unwrap();
+                if batch_by_batch {
+                    let grid = sim.grid_constraints.as_mut().unwrap();
+                    assert!(grid.row_strips.iter().any(Option::is_some));
+                    grid.row_strips.iter_mut().for_each(|r| *r = None);
+                }
+                if forces_beforehand {
+                    sim.grid_triangulation = None; // the general triangle path, summed into `forces`
+                }
+                for _ in 0..20 {
+                    sim.step(1.0 / 60.0).unwrap();
+                }
+                let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+                    v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+                };
+                (bits(sim.positions()), bits(sim.velocities()))
+            };
+            let shared = run(false, false);
+            assert_eq!(shared, run(true, false), "{method:?}: batch by batch");
+            assert_eq!(shared, run(false, true), "{method:?}: forces beforehand");
+            assert_eq!(shared, run(true, true), "{method:?}: both");
         }
     }
 }

@@ -361,7 +361,7 @@ impl Simulation {
         };
         let wind = self.params.wind;
         // Position-based methods on a grid run their sub-steps on a team of rayon's thread count
-        // (`TeamSlot`): about twenty short passes per sub-step, too short for rayon's hand-off.
+        // (`TeamSlot`): eleven short passes per sub-step on a grid, too short for rayon's hand-off.
         let team_threads = if self.parallel()
             && self.grid_constraints.is_some()
             && matches!(
@@ -459,37 +459,27 @@ impl Simulation {
         self.positions.len() >= self.params.parallel_min_particles
     }
 
-    /// Total force on every particle (N) into `self.forces`: springs (if `with_springs`), gravity, air
-    /// damping and wind at time `time`.
-    pub(crate) fn compute_forces(&mut self, time: f64, with_springs: bool) {
+    /// Renews the triangles' corner shares of the aerodynamic force (N) at time `time` in
+    /// `self.triangle_forces` when they are due; whether the wind acts at all.
+    fn refresh_wind_shares(&mut self, time: f64) -> bool {
         let parallel = self.parallel();
         let Simulation {
             positions,
             velocities,
-            springs,
-            family,
-            spring_forces,
             triangle_forces,
             triangles,
-            forces,
-            masses,
             params,
             wind,
             wind_stale,
             grid_triangulation,
-            spring_incidence,
-            triangle_incidence,
             ..
         } = self;
         let (positions, velocities) = (&positions[..], &velocities[..]);
         let wind_active = params.wind.is_active() && !triangles.is_empty();
         let refresh_wind = wind_active && (*wind_stale || params.wind.updated_every_substep());
-        let air_velocity = wind.air_velocity(time);
-        let wind_params = *wind.params();
-        let gravity = params.gravity;
-        let air_damping = params.air_damping;
-        let body_force = |i: usize| masses[i] * (gravity - air_damping * velocities[i]);
         if refresh_wind {
+            let air_velocity = wind.air_velocity(time);
+            let wind_params = *wind.params();
             *wind_stale = false;
             if let Some(shape) = *grid_triangulation {
                 grid_triangle_forces(
@@ -513,6 +503,48 @@ impl Simulation {
                 });
             }
         }
+        wind_active
+    }
+
+    /// For the position-based solvers on a grid, which can sum each row's forces in their first pass
+    /// over the rows ([`row_forces`](crate::grid_wind::row_forces)): renews the wind's shares when due
+    /// and says what the rows add to the body force — `Some(true)` the shares, `Some(false)` nothing (no
+    /// wind) — or, when the triangles are not the grid's own, sums the forces into `self.forces`
+    /// ([`compute_forces`](Simulation::compute_forces)) and returns `None`.
+    pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<bool> {
+        let wind_active = self.params.wind.is_active() && !self.triangles.is_empty();
+        if wind_active && self.grid_triangulation.is_none() {
+            self.compute_forces(time, false);
+            return None;
+        }
+        Some(self.refresh_wind_shares(time))
+    }
+
+    /// Total force on every particle (N) into `self.forces`: springs (if `with_springs`), gravity, air
+    /// damping and wind at time `time`.
+    pub(crate) fn compute_forces(&mut self, time: f64, with_springs: bool) {
+        let wind_active = self.refresh_wind_shares(time);
+        let parallel = self.parallel();
+        let Simulation {
+            positions,
+            velocities,
+            springs,
+            family,
+            spring_forces,
+            triangle_forces,
+            triangles,
+            forces,
+            masses,
+            params,
+            grid_triangulation,
+            spring_incidence,
+            triangle_incidence,
+            ..
+        } = self;
+        let (positions, velocities) = (&positions[..], &velocities[..]);
+        let gravity = params.gravity;
+        let air_damping = params.air_damping;
+        let body_force = |i: usize| masses[i] * (gravity - air_damping * velocities[i]);
         if let (true, false, Some(shape)) = (wind_active, with_springs, *grid_triangulation) {
             // The body force and the wind in one pass over the grid's rows, summed in the same order.
             let body = BodyForce {
