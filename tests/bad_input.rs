@@ -97,6 +97,11 @@ fn options_that_do_not_go_together_are_one_line_usage_errors() {
         1,
         &["--wind-substeps-per-update"],
     );
+    assert_one_line_error(
+        &["bench", "sim", "--spring-damping", "maybe"],
+        2,
+        &["--spring-damping", "maybe"],
+    );
     // Missing required arguments are listed on the same line.
     assert_one_line_error(&["figure2"], 2, &["--out"]);
 }

@@ -83,6 +83,31 @@ fn bench_sim_reports_a_diverging_method_instead_of_timing_garbage() {
 }
 
 #[test]
+fn bench_sim_times_the_flag_without_spring_damping() {
+    let out = sheer(&[
+        "bench",
+        "sim",
+        "--csv",
+        "--method",
+        "small_steps_xpbd",
+        "--grid",
+        "16x11",
+        "--threads",
+        "1",
+        "--seconds",
+        "0",
+        "--spring-damping",
+        "off",
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let row = text.lines().nth(1).unwrap();
+    assert!(row.starts_with("small_steps_xpbd,16,11,"), "{text}");
+    let ms: f64 = row.split(',').nth(6).unwrap().parse().unwrap();
+    assert!(ms > 0.0 && ms.is_finite(), "{text}");
+}
+
+#[test]
 fn bad_arguments_are_one_line_errors_with_a_failing_status() {
     for args in [
         &["bench", "sim", "--method", "rk4"][..],

@@ -39,12 +39,33 @@ pub struct BenchSimArgs {
     /// (`wind.substeps_per_update`; default: the library's, 1, every sub-step).
     #[arg(long, allow_negative_numbers = true)]
     pub wind_substeps_per_update: Option<u32>,
+    /// The springs' dashpots (`damping` of stretch, shear and bending): `on` (the library's defaults)
+    /// or `off` (all three 0 N·s/m, which the position-based solvers skip on a grid).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub spring_damping: Switch,
     /// Minimum measuring time per case, seconds (at least one frame is always timed).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
     /// Print CSV: method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s
     #[arg(long)]
     pub csv: bool,
+}
+
+/// A model part switched on or off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Switch {
+    On,
+    Off,
+}
+
+/// What `sheer bench sim` changes in the library's defaults besides the method and the grid.
+#[derive(Clone, Copy, Debug)]
+pub struct FlagOverrides {
+    /// `parallel_min_particles`; `None`: the library's.
+    pub parallel_min_particles: Option<usize>,
+    /// `wind.substeps_per_update`; `None`: the library's.
+    pub wind_substeps_per_update: Option<u32>,
+    pub spring_damping: Switch,
 }
 
 /// `method` with the given sub-steps and iterations (PBD, XPBD; the CG cap of implicit Euler), its
@@ -127,8 +148,7 @@ pub fn flag_simulation(
     columns: usize,
     rows: usize,
     method: Method,
-    parallel_min_particles: Option<usize>,
-    wind_substeps_per_update: Option<u32>,
+    overrides: FlagOverrides,
 ) -> Result<Simulation, CliError> {
     let spec = GridSpec {
         columns,
@@ -141,11 +161,16 @@ pub fn flag_simulation(
         ..SimParams::default()
     };
     params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
-    if let Some(interval) = wind_substeps_per_update {
+    if let Some(interval) = overrides.wind_substeps_per_update {
         params.wind.substeps_per_update = interval;
     }
-    if let Some(threshold) = parallel_min_particles {
+    if let Some(threshold) = overrides.parallel_min_particles {
         params.parallel_min_particles = threshold;
+    }
+    if overrides.spring_damping == Switch::Off {
+        for springs in [&mut params.stretch, &mut params.shear, &mut params.bend] {
+            springs.damping = 0.0;
+        }
     }
     Ok(Simulation::new(model, params)?)
 }
@@ -156,21 +181,14 @@ fn measure(
     rows: usize,
     threads: usize,
     minimum: Duration,
-    parallel_min_particles: Option<usize>,
-    wind_substeps_per_update: Option<u32>,
+    overrides: FlagOverrides,
 ) -> Result<Measurement, CliError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::new(format!("cannot start {threads} threads: {e}")))?;
     pool.install(|| {
-        let mut sim = flag_simulation(
-            columns,
-            rows,
-            method,
-            parallel_min_particles,
-            wind_substeps_per_update,
-        )?;
+        let mut sim = flag_simulation(columns, rows, method, overrides)?;
         let mut result = Measurement {
             method,
             columns,
@@ -243,6 +261,11 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         return Err(CliError::new("--wind-substeps-per-update must be ≥ 1"));
     }
     let minimum = Duration::from_secs_f64(args.seconds);
+    let overrides = FlagOverrides {
+        parallel_min_particles: args.parallel_min_particles,
+        wind_substeps_per_update: args.wind_substeps_per_update,
+        spring_damping: args.spring_damping,
+    };
     if args.csv {
         println!(
             "method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s"
@@ -262,15 +285,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     for &(columns, rows) in &grids {
         for &method in &methods {
             for &t in &threads {
-                let m = measure(
-                    method,
-                    columns,
-                    rows,
-                    t,
-                    minimum,
-                    args.parallel_min_particles,
-                    args.wind_substeps_per_update,
-                )?;
+                let m = measure(method, columns, rows, t, minimum, overrides)?;
                 let mut line = String::new();
                 if args.csv {
                     let _ = write!(
