@@ -157,6 +157,22 @@ pub fn ablation(
             method,
         },
         Variant {
+            part: "spring damping",
+            setting: "off (all three families)".into(),
+            scene: with_params(scene, |p| {
+                p.stretch.damping = 0.0;
+                p.shear.damping = 0.0;
+                p.bend.damping = 0.0;
+            }),
+            method,
+        },
+        Variant {
+            part: "air damping",
+            setting: "off".into(),
+            scene: with_params(scene, |p| p.air_damping = 0.0),
+            method,
+        },
+        Variant {
             part: "wind lift",
             setting: "off (C_L = 0)".into(),
             scene: with_params(scene, |p| p.wind.lift_coefficient = 0.0),

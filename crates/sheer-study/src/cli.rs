@@ -395,13 +395,16 @@ fn halving_lines(scene: &Scene, reference: &Reference, text: &mut String) {
 fn parameter_line(scene: &Scene) -> String {
     let p = &scene.params;
     format!(
-        "stretch {} N/m, shear {} N/m, bending {} N/m (enabled: {}/{}/{}), wind {:?} m/s, gusts {}, turbulence {}, lift {}, long-range attachments {}, air damping {} 1/s, {} kg/m²",
+        "stretch {} N/m, shear {} N/m, bending {} N/m (enabled: {}/{}/{}), spring damping {}/{}/{} N·s/m, wind {:?} m/s, gusts {}, turbulence {}, lift {}, long-range attachments {}, air damping {} 1/s, {} kg/m²",
         p.stretch.stiffness,
         p.shear.stiffness,
         p.bend.stiffness,
         p.stretch.enabled,
         p.shear.enabled,
         p.bend.enabled,
+        p.stretch.damping,
+        p.shear.damping,
+        p.bend.damping,
         p.wind.velocity.to_array(),
         p.wind.gust_strength,
         p.wind.turbulence,
