@@ -9,27 +9,33 @@ fn sheer(args: &[&str]) -> std::process::Output {
         .expect("the sheer binary runs")
 }
 
-#[test]
-fn bench_sim_prints_the_documented_csv() {
-    let out = sheer(&[
+/// `sheer bench sim --csv` on the 16 × 11 flag, one thread, one frame per case, with `options`: its
+/// output, after checking that it succeeded.
+fn bench_sim_csv(options: &[&str]) -> String {
+    let mut args = vec![
         "bench",
         "sim",
         "--csv",
-        "--method",
-        "small_steps_xpbd,symplectic_euler",
         "--grid",
         "16x11",
         "--threads",
         "1",
         "--seconds",
         "0",
-    ]);
+    ];
+    args.extend_from_slice(options);
+    let out = sheer(&args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8(out.stdout).unwrap();
+    String::from_utf8(out.stdout).unwrap()
+}
+
+#[test]
+fn bench_sim_prints_the_documented_csv() {
+    let text = bench_sim_csv(&["--method", "small_steps_xpbd,symplectic_euler"]);
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
@@ -59,23 +65,7 @@ fn bench_sim_prints_the_documented_csv() {
 
 #[test]
 fn bench_sim_reports_a_diverging_method_instead_of_timing_garbage() {
-    let out = sheer(&[
-        "bench",
-        "sim",
-        "--csv",
-        "--method",
-        "symplectic_euler",
-        "--substeps",
-        "1",
-        "--grid",
-        "16x11",
-        "--threads",
-        "1",
-        "--seconds",
-        "0",
-    ]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = bench_sim_csv(&["--method", "symplectic_euler", "--substeps", "1"]);
     assert!(
         text.lines().nth(1).unwrap().ends_with("diverged,diverged"),
         "{text}"
@@ -84,23 +74,7 @@ fn bench_sim_reports_a_diverging_method_instead_of_timing_garbage() {
 
 #[test]
 fn bench_sim_times_the_flag_without_spring_damping() {
-    let out = sheer(&[
-        "bench",
-        "sim",
-        "--csv",
-        "--method",
-        "small_steps_xpbd",
-        "--grid",
-        "16x11",
-        "--threads",
-        "1",
-        "--seconds",
-        "0",
-        "--spring-damping",
-        "off",
-    ]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = bench_sim_csv(&["--method", "small_steps_xpbd", "--spring-damping", "off"]);
     let row = text.lines().nth(1).unwrap();
     assert!(row.starts_with("small_steps_xpbd,16,11,"), "{text}");
     let ms: f64 = row.split(',').nth(6).unwrap().parse().unwrap();

@@ -728,34 +728,23 @@ mod tests {
                 gamma,
             };
             let mut lambda = 2e-6;
-            let args = (1.6e4, 1.7e4, 0.0175, 1.0 / 3.5e4);
-            if damped {
-                project::<false, true, true>(
-                    &mut a,
-                    &mut b,
-                    start_a,
-                    start_b,
-                    args.0,
-                    args.1,
-                    args.2,
-                    args.3,
-                    &mut lambda,
-                    family,
-                );
+            let project = if damped {
+                project::<false, true, true>
             } else {
-                project::<false, true, false>(
-                    &mut a,
-                    &mut b,
-                    start_a,
-                    start_b,
-                    args.0,
-                    args.1,
-                    args.2,
-                    args.3,
-                    &mut lambda,
-                    family,
-                );
-            }
+                project::<false, true, false>
+            };
+            project(
+                &mut a,
+                &mut b,
+                start_a,
+                start_b,
+                1.6e4,
+                1.7e4,
+                0.0175,
+                1.0 / 3.5e4,
+                &mut lambda,
+                family,
+            );
             (a, b, lambda)
         };
         assert_eq!(project_with(true, 0.0), project_with(false, 0.0));
