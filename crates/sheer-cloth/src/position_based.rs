@@ -175,34 +175,19 @@ impl Simulation {
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
         // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
         let multipliers = iterations > 1 && !is_pbd;
-        match (is_pbd, multipliers, on_grid) {
-            (true, _, true) => self.project_grid_constraints::<true, false>(
+        match (is_pbd, multipliers) {
+            (true, _) => {
+                self.project_constraints::<true, false>(h, iterations, family_constants, row_forces)
+            }
+            (false, true) => {
+                self.project_constraints::<false, true>(h, iterations, family_constants, row_forces)
+            }
+            (false, false) => self.project_constraints::<false, false>(
                 h,
                 iterations,
                 family_constants,
                 row_forces,
             ),
-            (false, true, true) => self.project_grid_constraints::<false, true>(
-                h,
-                iterations,
-                family_constants,
-                row_forces,
-            ),
-            (false, false, true) => self.project_grid_constraints::<false, false>(
-                h,
-                iterations,
-                family_constants,
-                row_forces,
-            ),
-            (true, _, false) => {
-                self.project_mesh_constraints::<true, false>(h, iterations, family_constants)
-            }
-            (false, true, false) => {
-                self.project_mesh_constraints::<false, true>(h, iterations, family_constants)
-            }
-            (false, false, false) => {
-                self.project_mesh_constraints::<false, false>(h, iterations, family_constants)
-            }
         }
         self.cached_forces_valid = false;
     }
@@ -334,6 +319,23 @@ unsafe fn end_sweep(
 }
 
 impl Simulation {
+    /// The constraint sweeps of a sub-step of length `h` (s): a grid's
+    /// ([`project_grid_constraints`](Simulation::project_grid_constraints), with `row_forces`) or a
+    /// general mesh's ([`project_mesh_constraints`](Simulation::project_mesh_constraints)).
+    fn project_constraints<const PBD: bool, const MULTIPLIERS: bool>(
+        &mut self,
+        h: f64,
+        iterations: u32,
+        family: [FamilyConstants; 3],
+        row_forces: Option<bool>,
+    ) {
+        if self.grid_constraints.is_some() {
+            self.project_grid_constraints::<PBD, MULTIPLIERS>(h, iterations, family, row_forces)
+        } else {
+            self.project_mesh_constraints::<PBD, MULTIPLIERS>(h, iterations, family)
+        }
+    }
+
     /// `iterations` Gauss–Seidel sweeps over a general mesh's constraints, colour batch by colour batch,
     /// each followed by the long-range attachments, then the velocities from the position change over
     /// the sub-step `h` (s) in the same pass as the last attachments. Grids go
@@ -504,10 +506,9 @@ impl Simulation {
             batches.len() - closing..batches.len(),
         );
         let lambdas = DisjointSlice::new(lambdas);
-        let positions_slice = DisjointSlice::new(positions);
+        let positions = DisjointSlice::new(positions);
         let previous = DisjointSlice::new(previous_positions);
         let velocities = DisjointSlice::new(velocities);
-        let positions = &positions_slice;
         let project_one = |strip: &Strip| {
             let family = family[family_index(springs[strip.first].kind)];
             let constraints = strip.first..strip.first + strip.count;
@@ -527,7 +528,7 @@ impl Simulation {
                 };
                 project(
                     strip,
-                    positions,
+                    &positions,
                     &previous,
                     inverse_masses,
                     rest,
@@ -608,7 +609,7 @@ impl Simulation {
                             particles_of(row),
                             tethers.as_ref(),
                             velocities,
-                            positions,
+                            &positions,
                             &previous,
                         )
                     };

@@ -459,9 +459,15 @@ impl Simulation {
         self.positions.len() >= self.params.parallel_min_particles
     }
 
+    /// Whether the wind exerts any force: it blows and there are triangles for it to act on.
+    fn wind_acts(&self) -> bool {
+        self.params.wind.is_active() && !self.triangles.is_empty()
+    }
+
     /// Renews the triangles' corner shares of the aerodynamic force (N) at time `time` in
     /// `self.triangle_forces` when they are due; whether the wind acts at all.
     fn refresh_wind_shares(&mut self, time: f64) -> bool {
+        let wind_active = self.wind_acts();
         let parallel = self.parallel();
         let Simulation {
             positions,
@@ -475,7 +481,6 @@ impl Simulation {
             ..
         } = self;
         let (positions, velocities) = (&positions[..], &velocities[..]);
-        let wind_active = params.wind.is_active() && !triangles.is_empty();
         let refresh_wind = wind_active && (*wind_stale || params.wind.updated_every_substep());
         if refresh_wind {
             let air_velocity = wind.air_velocity(time);
@@ -512,8 +517,7 @@ impl Simulation {
     /// wind) — or, when the triangles are not the grid's own, sums the forces into `self.forces`
     /// ([`compute_forces`](Simulation::compute_forces)) and returns `None`.
     pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<bool> {
-        let wind_active = self.params.wind.is_active() && !self.triangles.is_empty();
-        if wind_active && self.grid_triangulation.is_none() {
+        if self.wind_acts() && self.grid_triangulation.is_none() {
             self.compute_forces(time, false);
             return None;
         }
