@@ -41,6 +41,8 @@ pub(crate) struct Strip {
     /// First particle.
     pub a: usize,
     pub layout: Layout,
+    /// The family of all its constraints (kept here so that the solver need not read a spring for it).
+    pub kind: SpringKind,
 }
 
 impl Strip {
@@ -82,6 +84,11 @@ pub(crate) struct GridConstraints {
     /// rows), the strips of row `r` as `row_strips[batch][r]` (a range of `strips`). The solver then
     /// projects such batches row by row in one pass with the per-particle work of the same rows.
     pub row_strips: Vec<Option<Vec<Range<usize>>>>,
+    /// Per batch, for the one-pass sweep ([`Wavefront`](crate::wavefront::Wavefront)): its strips by the
+    /// last particle row they touch, `by_last_row[batch][r]` (a range of `strips`), and how many rows
+    /// each of them spans beyond its first; `None` if some batch's strips are not in ascending rows or
+    /// differ in span.
+    pub by_last_row: Option<Vec<(Vec<Range<usize>>, usize)>>,
 }
 
 impl GridConstraints {
@@ -119,6 +126,7 @@ impl GridConstraints {
                 count,
                 a,
                 layout,
+                kind,
             };
             for k in 0..count {
                 let spring = by_ends.get(&strip.ends(k))?;
@@ -229,48 +237,57 @@ impl GridConstraints {
         grid.rest_lengths = grid.springs.iter().map(|s| s.rest_length).collect();
         grid.inverse_denominators = vec![0.0; n];
         grid.lambdas = vec![0.0; n];
-        grid.row_strips = grid
+        let last_rows: Vec<_> = grid
             .batches
             .iter()
-            .map(|batch| rows_of_batch(&grid.strips[batch.clone()], batch.start, columns, rows))
+            .map(|batch| {
+                last_rows_of_batch(&grid.strips[batch.clone()], batch.start, columns, rows)
+            })
             .collect();
+        // A batch whose strips span no row beyond their first lies within rows.
+        grid.row_strips = last_rows
+            .iter()
+            .map(|by_row| match by_row {
+                Some((by_row, 0)) => Some(by_row.clone()),
+                _ => None,
+            })
+            .collect();
+        grid.by_last_row = last_rows.into_iter().collect();
         Some(grid)
     }
 }
 
-/// The row of a strip whose particles all lie in one row of `columns`, if they do.
-fn row_of_strip(strip: &Strip, columns: usize) -> Option<usize> {
-    let row = strip.a / columns;
-    let within = |range: &Range<usize>| {
-        range.is_empty() || (range.start / columns == row && (range.end - 1) / columns == row)
-    };
-    strip.particle_ranges().iter().all(within).then_some(row)
-}
-
-/// For a batch whose strips (the first at index `first` of all strips) each lie within one row, in
-/// ascending rows: the strips of each of the `rows` rows (empty for a row without any); `None` for any
-/// other batch.
-fn rows_of_batch(
+/// A batch's strips (the first at index `first` of all strips) by the last of the `rows` rows of
+/// `columns` particles they touch, and the rows each spans beyond its first; `None` unless the strips
+/// come in ascending last rows and all span alike.
+fn last_rows_of_batch(
     strips: &[Strip],
     first: usize,
     columns: usize,
     rows: usize,
-) -> Option<Vec<Range<usize>>> {
+) -> Option<(Vec<Range<usize>>, usize)> {
     let mut by_row = vec![0..0; rows];
+    let mut span = None;
     let mut previous_row = 0;
     for (k, strip) in strips.iter().enumerate() {
-        let row = row_of_strip(strip, columns)?;
-        if row < previous_row {
+        let touched = strip.particle_ranges();
+        let last = touched
+            .iter()
+            .filter(|r| !r.is_empty())
+            .map(|r| (r.end - 1) / columns)
+            .max()?;
+        let first_row = strip.a / columns;
+        if *span.get_or_insert(last - first_row) != last - first_row || last < previous_row {
             return None;
         }
         let index = first + k;
-        if by_row[row].is_empty() {
-            by_row[row] = index..index;
+        if by_row[last].is_empty() {
+            by_row[last] = index..index;
         }
-        by_row[row].end = index + 1;
-        previous_row = row;
+        by_row[last].end = index + 1;
+        previous_row = last;
     }
-    Some(by_row)
+    Some((by_row, span.unwrap_or(0)))
 }
 
 /// Per-sub-step constants of one constraint family: `(α̃, γ)` of XPBD (Macklin et al. 2016 eqs. (18) and

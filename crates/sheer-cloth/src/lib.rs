@@ -32,6 +32,7 @@ mod params;
 mod position_based;
 mod sim;
 mod vectorise;
+mod wavefront;
 pub mod wind;
 
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};

@@ -7,7 +7,8 @@
 //! parallel with the same result), then velocities from the position change. The batches are a grid's
 //! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a grid the batches
 //! along rows share a pass over the rows with the forces and the prediction before them, or with the
-//! attachments and the velocities after them. In parallel, a grid's passes go to the simulation's team
+//! attachments and the velocities after them; a large grid runs all its batches in one pass, as a
+//! wavefront down the rows ([`Wavefront`]). In parallel, a grid's passes go to the simulation's team
 //! of threads ([`parts`]), a mesh's to rayon.
 
 use glam::DVec3;
@@ -20,8 +21,9 @@ use crate::grid_wind::row_forces as grid_row_forces;
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts};
 use crate::params::SimParams;
-use crate::sim::{Simulation, family_index};
+use crate::sim::{GridSweep, Simulation, family_index};
 use crate::vectorise::by_cpu;
+use crate::wavefront::Wavefront;
 
 /// One distance constraint as the solver streams it, in colour order. 32 bytes: per-family constants
 /// live in a 3-entry table and inverse masses in the particle array, so that the constraints of large
@@ -40,6 +42,15 @@ pub(crate) struct PackedConstraint {
 
 /// Batches smaller than this run on one thread even in parallel mode: rayon's fork–join costs more.
 const MIN_PARALLEL_BATCH: usize = 2048;
+
+/// A grid's sweeps run as one wavefront from this many particles: below it the cloth's data largely
+/// stays in the last-level cache from pass to pass, and pass by pass measured as fast or faster (crate
+/// README, "One pass per sub-step").
+const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
+
+/// With threads, the wavefront needs this many rows per thread per row of its depth: the seams around
+/// the cuts between the threads' parts, twice the depth each, run on one thread each.
+const WAVEFRONT_ROWS_PER_DEPTH: usize = 10;
 
 /// Particles per rayon task in the per-particle passes.
 const PARTICLE_GRAIN: usize = 4096;
@@ -471,6 +482,7 @@ impl Simulation {
             triangle_forces,
             grid: Some(shape),
             grid_constraints: Some(grid),
+            grid_sweep,
             ..
         } = self
         else {
@@ -483,14 +495,16 @@ impl Simulation {
         let shares = row_forces.unwrap_or(false).then_some(&triangle_forces[..]);
         let (gravity, air_damping) = (params.gravity, params.air_damping);
         let GridConstraints {
-            springs,
+            springs: _,
             strips,
             batches,
             rest_lengths,
             inverse_denominators,
             lambdas,
             row_strips,
+            by_last_row,
         } = grid;
+        let sweep_order = *grid_sweep;
         if MULTIPLIERS {
             lambdas.fill(0.0);
         }
@@ -510,7 +524,7 @@ impl Simulation {
         let previous = DisjointSlice::new(previous_positions);
         let velocities = DisjointSlice::new(velocities);
         let project_one = |strip: &Strip| {
-            let family = family[family_index(springs[strip.first].kind)];
+            let family = family[family_index(strip.kind)];
             let constraints = strip.first..strip.first + strip.count;
             let (rest, inverse_denominators) = (
                 &rest_lengths[constraints.clone()],
@@ -548,35 +562,72 @@ impl Simulation {
         };
         let particles_of = |row: usize| row * columns..(row + 1) * columns;
         let row_grain = PARTICLE_GRAIN.div_ceil(columns);
-        // First pass: the forces (unless summed already), the prediction, then the opening batches,
-        // row by row.
+        // The sub-step's forces (unless summed already) and prediction on row `row`.
+        let predict_row = |row: usize| {
+            let range = particles_of(row);
+            // SAFETY: each row goes to one part of a pass.
+            unsafe {
+                if row_forces.is_some() {
+                    grid_row_forces(
+                        shape,
+                        shares,
+                        row,
+                        &masses[range.clone()],
+                        velocities.slice(range.clone()),
+                        gravity,
+                        air_damping,
+                        forces.slice_mut(range.clone()),
+                    );
+                }
+                predict_positions(
+                    h,
+                    &inverse_masses[range.clone()],
+                    forces.slice(range.clone()),
+                    positions.slice_mut(range.clone()),
+                    velocities.slice_mut(range.clone()),
+                    previous.slice_mut(range),
+                )
+            };
+        };
+        let threads = if parallel {
+            rayon::current_num_threads()
+        } else {
+            1
+        };
+        // The sweeps as one wavefront: the batches of every sweep, each followed by the sweep's end.
+        let wavefront = by_last_row.as_ref().and_then(|by_last_row| {
+            let sweep = by_last_row.iter().map(|(_, span)| *span).chain([0]);
+            let spans: Vec<usize> = (0..iterations).flat_map(|_| sweep.clone()).collect();
+            let plan = Wavefront::new(spans, rows);
+            let parts = match sweep_order {
+                GridSweep::Passes => return None,
+                GridSweep::Wavefront { parts } => {
+                    assert!(plan.fits(parts), "{parts} parts do not fit {rows} rows");
+                    parts
+                }
+                // Once the cloth outgrows the caches, and with threads only when the seams, which run
+                // on one thread each, are a small share of the rows.
+                GridSweep::Auto => {
+                    let pays = positions.len() >= WAVEFRONT_MIN_PARTICLES
+                        && (threads == 1
+                            || rows >= WAVEFRONT_ROWS_PER_DEPTH * threads * plan.depth());
+                    if !pays {
+                        return None;
+                    }
+                    threads
+                }
+            };
+            plan.fits(parts).then_some((plan, parts))
+        });
+        // First pass: the forces (unless summed already) and the prediction, then, pass by pass, the
+        // opening batches, row by row. The attachments then gather the pins' predicted positions, which no
+        // projection moves (inverse mass 0).
         parts(rows, parallel, row_grain, |rows| {
             for row in rows {
-                let range = particles_of(row);
-                // SAFETY: the parts are disjoint, and so are their rows.
-                unsafe {
-                    if row_forces.is_some() {
-                        grid_row_forces(
-                            shape,
-                            shares,
-                            row,
-                            &masses[range.clone()],
-                            velocities.slice(range.clone()),
-                            gravity,
-                            air_damping,
-                            forces.slice_mut(range.clone()),
-                        );
-                    }
-                    predict_positions(
-                        h,
-                        &inverse_masses[range.clone()],
-                        forces.slice(range.clone()),
-                        positions.slice_mut(range.clone()),
-                        velocities.slice_mut(range.clone()),
-                        previous.slice_mut(range),
-                    )
-                };
-                project_row(0..opening, row);
+                predict_row(row);
+                if wavefront.is_none() {
+                    project_row(0..opening, row);
+                }
             }
         });
         let tethers = Tethers::of_substep(
@@ -589,6 +640,36 @@ impl Simulation {
             tether_pin_positions,
             tether_anchor_positions,
         );
+        if let Some((plan, parts_count)) = wavefront {
+            let per_sweep = batches.len() + 1;
+            let run_item = |item: usize, row: usize| {
+                let (sweep, batch) = (item / per_sweep, item % per_sweep);
+                if let Some((by_row, _)) = by_last_row.as_ref().unwrap().get(batch) {
+                    strips[by_row[row].clone()].iter().for_each(project_one);
+                } else {
+                    let last = sweep + 1 == iterations as usize;
+                    // SAFETY: the wavefront gives each row's end of a sweep to one part or seam, after
+                    // every strip that touches the row in that sweep and before any of the next.
+                    unsafe {
+                        end_sweep(
+                            particles_of(row),
+                            tethers.as_ref(),
+                            last.then_some((&velocities, 1.0 / h)),
+                            &positions,
+                            &previous,
+                        )
+                    };
+                }
+            };
+            // Then every part's own strips, then the seams between the parts.
+            parts(parts_count, parallel, 1, |part| {
+                part.for_each(|p| plan.run_part(p, parts_count, run_item))
+            });
+            parts(parts_count - 1, parallel, 1, |seams| {
+                seams.for_each(|s| plan.run_seam(s + 1, parts_count, run_item))
+            });
+            return;
+        }
         for iteration in 0..iterations {
             for batch in middle.clone() {
                 let strips = &strips[batches[batch].clone()];
@@ -649,6 +730,42 @@ mod tests {
     use crate::sim::Simulation;
     use glam::DVec3;
 
+    /// A grid of `columns` × `rows` particles and `height` m, hoist pinned, in a 6 m/s wind, stepped with
+    /// `method`; the parallel code paths on with `parallel` (and off without).
+    fn windy_flag(
+        columns: usize,
+        rows: usize,
+        height: f64,
+        method: Method,
+        parallel: bool,
+    ) -> Simulation {
+        let spec = GridSpec {
+            columns,
+            rows,
+            height,
+            ..GridSpec::default()
+        };
+        let model = ClothModel::grid(&spec)
+            .unwrap()
+            .with_hoist_pinned()
+            .unwrap();
+        let mut params = SimParams {
+            method,
+            ..SimParams::default()
+        };
+        params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
+        params.parallel_min_particles = if parallel { 0 } else { usize::MAX };
+        Simulation::new(model, params).unwrap()
+    }
+
+    /// The bits of the positions and the velocities.
+    fn state_bits(sim: &Simulation) -> (Vec<[u64; 3]>, Vec<[u64; 3]>) {
+        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+            v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+        };
+        (bits(sim.positions()), bits(sim.velocities()))
+    }
+
     /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
     /// the batches along rows, the attachments and the velocities in another) give the bits of the same
     /// work done pass by pass: batch by batch, and the forces summed beforehand by the general path.
@@ -667,21 +784,8 @@ mod tests {
             },
         ] {
             let run = |batch_by_batch: bool, forces_beforehand: bool| {
-                let spec = GridSpec {
-                    columns: 23,
-                    rows: 13,
-                    ..GridSpec::default()
-                };
-                let model = ClothModel::grid(&spec)
-                    .unwrap()
-                    .with_hoist_pinned()
-                    .unwrap();
-                let mut params = SimParams {
-                    method,
-                    ..SimParams::default()
-                };
-                params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
-                let mut sim = Simulation::new(model, params).unwrap();
+                let height = GridSpec::default().height;
+                let mut sim = windy_flag(23, 13, height, method, false);
                 if batch_by_batch {
                     let grid = sim.grid_constraints.as_mut().unwrap();
                     assert!(grid.row_strips.iter().any(Option::is_some));
@@ -693,15 +797,79 @@ mod tests {
                 for _ in 0..20 {
                     sim.step(1.0 / 60.0).unwrap();
                 }
-                let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
-                    v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
-                };
-                (bits(sim.positions()), bits(sim.velocities()))
+                state_bits(&sim)
             };
             let shared = run(false, false);
             assert_eq!(shared, run(true, false), "{method:?}: batch by batch");
             assert_eq!(shared, run(false, true), "{method:?}: forces beforehand");
             assert_eq!(shared, run(true, true), "{method:?}: both");
+        }
+    }
+
+    /// The one-pass wavefront gives the bits of pass by pass, on one part and on as many as fit (each
+    /// part's own strips, then the seams), for one sweep per sub-step and for several, with wind, the
+    /// long-range attachments and a moving pole.
+    #[test]
+    fn the_wavefront_gives_the_bits_of_pass_by_pass() {
+        use crate::sim::GridSweep;
+        // (method, sweeps per sub-step, part counts): a sweep's wavefront is 10 rows deep, and each part
+        // needs twice the depth, so 131 rows take up to 6 parts of one sweep and 3 of two.
+        let cases = [
+            (
+                Method::SmallStepsXpbd { substeps: 20 },
+                1,
+                vec![1, 2, 3, 4, 6],
+            ),
+            (
+                Method::Xpbd {
+                    substeps: 2,
+                    iterations: 2,
+                },
+                2,
+                vec![1, 2, 3],
+            ),
+            (
+                Method::Pbd {
+                    substeps: 2,
+                    iterations: 2,
+                    stiffness: 1.0,
+                },
+                2,
+                vec![1, 3],
+            ),
+        ];
+        let rows = 131;
+        for (method, sweeps, part_counts) in cases {
+            // `threads` > 1: on a pool of that many threads, the parallel code paths forced on.
+            let run = |sweep: GridSweep, threads: usize| {
+                let mut sim = windy_flag(9, rows, 3.0, method, threads > 1);
+                sim.grid_sweep = sweep;
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    for frame in 0..12 {
+                        let turn = glam::DAffine3::from_rotation_y(0.01 * frame as f64);
+                        sim.move_pins(turn).unwrap();
+                        sim.step(1.0 / 60.0).unwrap();
+                    }
+                });
+                state_bits(&sim)
+            };
+            let passes = run(GridSweep::Passes, 1);
+            for parts in part_counts {
+                assert!(rows >= parts * 2 * 10 * sweeps, "{parts} parts fit");
+                // The parts one after another on one thread, and on as many threads as parts (two
+                // when one part: a team of two on one part and one seam-less pass).
+                for threads in [1, parts.max(2)] {
+                    assert_eq!(
+                        passes,
+                        run(GridSweep::Wavefront { parts }, threads),
+                        "{method:?}: the wavefront in {parts} parts on {threads} threads"
+                    );
+                }
+            }
         }
     }
 }

@@ -161,6 +161,21 @@ pub struct Simulation {
     /// Grids: the constraints in row strips, which the position-based solvers project instead of the
     /// colour batches.
     pub(crate) grid_constraints: Option<GridConstraints>,
+    /// How a grid's position-based sub-step orders its batches (tests pick one; the solver picks by size).
+    pub(crate) grid_sweep: GridSweep,
+}
+
+/// The order in which a grid's position-based sub-step runs its batches. Every choice gives the same bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
+pub(crate) enum GridSweep {
+    /// The one-pass wavefront when the cloth is large or on one thread, else pass by pass.
+    #[default]
+    Auto,
+    /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
+    Passes,
+    /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they fit.
+    Wavefront { parts: usize },
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -299,6 +314,7 @@ impl Simulation {
             grid_constraints: model
                 .grid
                 .and_then(|shape| GridConstraints::new(shape, &model.springs)),
+            grid_sweep: GridSweep::Auto,
             grid_triangulation: model
                 .grid
                 .filter(|shape| model.triangles == shape.triangles()),
