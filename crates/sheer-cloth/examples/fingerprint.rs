@@ -2,8 +2,9 @@
 //! bit-identical, and times one setting, to compare two builds of the library in interleaved runs.
 //!
 //! `cargo run -p sheer-cloth --release --example fingerprint` waves the default flag, a larger grid and
-//! a long narrow one with five methods, the wind updated every sub-step and every 4, on one thread and on two; then a
-//! general triangle mesh and a grid without wind. Each case prints a hash of the final positions and
+//! a long narrow one with five methods, the wind updated every sub-step and every 4, on one thread and
+//! on two; then a general triangle mesh, a grid without wind, and a grid of 262 144 particles, large
+//! enough for the one-pass wavefront on both thread counts (small-steps XPBD ×20, three frames). Each case prints a hash of the final positions and
 //! velocities (and of the frame a run diverged at, if it did), and `TOTAL` hashes them all: two builds
 //! with the same `TOTAL` gave the same bits in every case.
 //!
@@ -167,6 +168,18 @@ fn main() {
                 report(format!("{case} {}, {threads} threads", method.name()), hash);
             }
         }
+    }
+    for threads in [1, 2] {
+        let hash = fingerprint(threads, 3, || {
+            let model = grid(512, 512).with_hoist_pinned().expect("a grid");
+            flag(
+                model,
+                Method::SmallStepsXpbd { substeps: 20 },
+                Some(1),
+                threads,
+            )
+        });
+        report(format!("512x512 small_steps_xpbd, {threads} threads"), hash);
     }
     println!("TOTAL {:016x}", total.finish());
 }

@@ -454,7 +454,9 @@ impl Simulation {
     /// share a pass over the rows with the per-particle work next to them (the forces and the prediction;
     /// the attachments and the velocities): every row is independent there, so each part of the team
     /// keeps its rows from one to the next, and a sub-step takes eleven passes instead of sixteen, with
-    /// the same arithmetic in the same order for every particle (tested).
+    /// the same arithmetic in the same order for every particle (tested). A large grid runs every batch
+    /// of the sub-step in one more pass after the forces and the prediction, as a wavefront down the rows
+    /// ([`Wavefront`]; same bits, tested).
     ///
     /// `row_forces` ([`Simulation::prepare_row_forces`]): `Some` when the first pass sums each row's
     /// forces itself (`true`: with the wind's shares), `None` when they are in `self.forces` already.
@@ -531,8 +533,9 @@ impl Simulation {
                 &inverse_denominators[constraints.clone()],
             );
             // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
-            // `grid_strips_*` tests), a pass over rows gives each row to one part, and each strip owns
-            // its constraints' multipliers.
+            // `grid_strips_*` tests); a pass over rows gives each row to one part, and the wavefront's
+            // concurrent parts and seams touch disjoint rows (`Wavefront::fits`); each strip owns its
+            // constraints' multipliers.
             unsafe {
                 let lambdas = lambdas.slice_mut(constraints);
                 let project = if family.gamma != 0.0 {
@@ -596,11 +599,12 @@ impl Simulation {
         };
         // The sweeps as one wavefront: the batches of every sweep, each followed by the sweep's end.
         let wavefront = by_last_row.as_ref().and_then(|by_last_row| {
-            let sweep = by_last_row.iter().map(|(_, span)| *span).chain([0]);
-            let spans: Vec<usize> = (0..iterations).flat_map(|_| sweep.clone()).collect();
+            let sweep_spans = by_last_row.iter().map(|(_, span)| *span).chain([0]);
+            let spans: Vec<usize> = (0..iterations).flat_map(|_| sweep_spans.clone()).collect();
             let plan = Wavefront::new(spans, rows);
             let parts = match sweep_order {
                 GridSweep::Passes => return None,
+                // A test's fixed order: refusing it would let the test compare pass by pass with itself.
                 GridSweep::Wavefront { parts } => {
                     assert!(plan.fits(parts), "{parts} parts do not fit {rows} rows");
                     parts
@@ -641,11 +645,17 @@ impl Simulation {
             tether_anchor_positions,
         );
         if let Some((plan, parts_count)) = wavefront {
+            // Items per sweep: the batches, then the sweep's end.
             let per_sweep = batches.len() + 1;
+            let by_last_row = by_last_row
+                .as_ref()
+                .expect("a wavefront plan has rows by last row");
             let run_item = |item: usize, row: usize| {
                 let (sweep, batch) = (item / per_sweep, item % per_sweep);
-                if let Some((by_row, _)) = by_last_row.as_ref().unwrap().get(batch) {
-                    strips[by_row[row].clone()].iter().for_each(project_one);
+                if batch < batches.len() {
+                    strips[by_last_row[batch].0[row].clone()]
+                        .iter()
+                        .for_each(project_one);
                 } else {
                     let last = sweep + 1 == iterations as usize;
                     // SAFETY: the wavefront gives each row's end of a sweep to one part or seam, after
@@ -661,12 +671,17 @@ impl Simulation {
                     };
                 }
             };
-            // Then every part's own strips, then the seams between the parts.
+            // Each part's own strips need nothing across a cut, so the parts run at once; the seams
+            // around the cuts need both neighbours' parts done, and touch disjoint rows of their own.
+            // Both passes have one index per part, so that each thread of the team takes one (seam `s`
+            // lies at the top of part `s`, and part 0 has none).
             parts(parts_count, parallel, 1, |part| {
                 part.for_each(|p| plan.run_part(p, parts_count, run_item))
             });
-            parts(parts_count - 1, parallel, 1, |seams| {
-                seams.for_each(|s| plan.run_seam(s + 1, parts_count, run_item))
+            parts(parts_count, parallel, 1, |seams| {
+                seams
+                    .filter(|&s| s > 0)
+                    .for_each(|s| plan.run_seam(s, parts_count, run_item))
             });
             return;
         }
@@ -839,6 +854,11 @@ mod tests {
             ),
         ];
         let rows = 131;
+        // The batches' row spans, as the schedule's own test takes them (`wavefront.rs`).
+        let sim = windy_flag(9, rows, 3.0, Method::default(), false);
+        let by_last_row = sim.grid_constraints.as_ref().unwrap().by_last_row.as_ref();
+        let spans: Vec<usize> = by_last_row.unwrap().iter().map(|(_, span)| *span).collect();
+        assert_eq!(spans, [0, 0, 2, 2, 1, 1, 1, 1, 1, 1, 0, 0]);
         for (method, sweeps, part_counts) in cases {
             // `threads` > 1: on a pool of that many threads, the parallel code paths forced on.
             let run = |sweep: GridSweep, threads: usize| {

@@ -169,7 +169,8 @@ pub struct Simulation {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
-    /// The one-pass wavefront when the cloth is large or on one thread, else pass by pass.
+    /// The one-pass wavefront from `WAVEFRONT_MIN_PARTICLES` (on several threads only with at least
+    /// `WAVEFRONT_ROWS_PER_DEPTH` times its depth in rows per thread), else pass by pass.
     #[default]
     Auto,
     /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).

@@ -172,6 +172,7 @@ mod tests {
         let sweep = [0, 0, 2, 2, 1, 1, 1, 1, 1, 1, 0, 0, 0];
         let cases: Vec<Vec<usize>> = vec![
             sweep.to_vec(),
+            sweep.repeat(2),
             sweep.repeat(3),
             vec![2, 0, 1, 2, 0, 0, 2],
             vec![1],
@@ -179,9 +180,9 @@ mod tests {
         ];
         let mut parallel_cases = 0;
         for spans in cases {
-            for rows in [3, 7, 30, 61, 100, 131] {
+            for rows in [3, 7, 30, 61, 100, 131, 240] {
                 let plan = Wavefront::new(spans.clone(), rows);
-                for parts in 1..=5 {
+                for parts in 1..=6 {
                     if !plan.fits(parts) {
                         continue;
                     }
@@ -197,9 +198,11 @@ mod tests {
                         if ri < spans[i] {
                             continue; // no strip of item i ends on that row
                         }
-                        for (&(j, rj), &b) in &slots {
-                            let share = ri - spans[i] <= rj && rj - spans[j].min(rj) <= ri;
-                            if i < j && rj >= spans[j] && share {
+                        // The later items' strips that share a row with it: last row rj with
+                        // rj − span_j ≤ ri and ri − span_i ≤ rj.
+                        for (j, &span_j) in spans.iter().enumerate().skip(i + 1) {
+                            for rj in (ri - spans[i]).max(span_j)..(ri + span_j + 1).min(rows) {
+                                let b = slots[&(j, rj)];
                                 assert!(
                                     before(a, b),
                                     "spans {spans:?}, {rows} rows, {parts} parts: \
