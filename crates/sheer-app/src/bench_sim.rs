@@ -168,9 +168,7 @@ pub fn flag_simulation(
         params.parallel_min_particles = threshold;
     }
     if overrides.spring_damping == Switch::Off {
-        for springs in [&mut params.stretch, &mut params.shear, &mut params.bend] {
-            springs.damping = 0.0;
-        }
+        params.remove_spring_damping();
     }
     Ok(Simulation::new(model, params)?)
 }

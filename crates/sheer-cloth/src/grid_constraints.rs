@@ -80,15 +80,12 @@ pub(crate) struct GridConstraints {
     pub rest_lengths: Vec<f64>,
     pub inverse_denominators: Vec<f64>,
     pub lambdas: Vec<f64>,
-    /// Per batch: when each of its strips lies within one particle row (the stretch and bending along
-    /// rows), the strips of row `r` as `row_strips[batch][r]` (a range of `strips`). The solver then
-    /// projects such batches row by row in one pass with the per-particle work of the same rows.
-    pub row_strips: Vec<Option<Vec<Range<usize>>>>,
-    /// Per batch, for the one-pass sweep ([`Wavefront`](crate::wavefront::Wavefront)): its strips by the
-    /// last particle row they touch, `by_last_row[batch][r]` (a range of `strips`), and how many rows
-    /// each of them spans beyond its first; `None` if some batch's strips are not in ascending rows or
-    /// differ in span.
-    pub by_last_row: Option<Vec<(Vec<Range<usize>>, usize)>>,
+    /// Per batch: its strips by the last particle row they touch, `by_last_row[batch].0[r]` (a range of
+    /// `strips`), and how many rows each of them spans beyond its first (`.1`). Batches of span 0 lie
+    /// within rows (the stretch and bending along rows): the solver projects them row by row in one pass
+    /// with the per-particle work of the same rows; and the one-pass sweep
+    /// ([`Wavefront`](crate::wavefront::Wavefront)) runs every batch row by row.
+    pub by_last_row: Vec<(Vec<Range<usize>>, usize)>,
 }
 
 impl GridConstraints {
@@ -237,22 +234,13 @@ impl GridConstraints {
         grid.rest_lengths = grid.springs.iter().map(|s| s.rest_length).collect();
         grid.inverse_denominators = vec![0.0; n];
         grid.lambdas = vec![0.0; n];
-        let last_rows: Vec<_> = grid
+        grid.by_last_row = grid
             .batches
             .iter()
             .map(|batch| {
                 last_rows_of_batch(&grid.strips[batch.clone()], batch.start, columns, rows)
             })
-            .collect();
-        // A batch whose strips span no row beyond their first lies within rows.
-        grid.row_strips = last_rows
-            .iter()
-            .map(|by_row| match by_row {
-                Some((by_row, 0)) => Some(by_row.clone()),
-                _ => None,
-            })
-            .collect();
-        grid.by_last_row = last_rows.into_iter().collect();
+            .collect::<Option<_>>()?;
         Some(grid)
     }
 }

@@ -396,6 +396,14 @@ impl SimParams {
         }
     }
 
+    /// Removes the dashpots of all three spring families (`damping` 0 N·s/m; the position-based solvers
+    /// on a grid then skip the damping term), stiffnesses unchanged.
+    pub fn remove_spring_damping(&mut self) {
+        for springs in [&mut self.stretch, &mut self.shear, &mut self.bend] {
+            springs.damping = 0.0;
+        }
+    }
+
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.method.validate()?;

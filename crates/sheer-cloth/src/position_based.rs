@@ -503,7 +503,6 @@ impl Simulation {
             rest_lengths,
             inverse_denominators,
             lambdas,
-            row_strips,
             by_last_row,
         } = grid;
         let sweep_order = *grid_sweep;
@@ -511,12 +510,18 @@ impl Simulation {
             lambdas.fill(0.0);
         }
         // The batches within rows that open a sweep, those that close it, and the rest.
-        let opening = row_strips.iter().take_while(|r| r.is_some()).count();
-        let closing = row_strips[opening..]
-            .iter()
-            .rev()
-            .take_while(|r| r.is_some())
-            .count();
+        let within_rows = |batch: &&(Vec<Range<usize>>, usize)| batch.1 == 0;
+        let (opening, closing) = if sweep_order == GridSweep::BatchByBatch {
+            (0, 0)
+        } else {
+            let opening = by_last_row.iter().take_while(within_rows).count();
+            let closing = by_last_row[opening..]
+                .iter()
+                .rev()
+                .take_while(within_rows)
+                .count();
+            (opening, closing)
+        };
         let (middle, closing) = (
             opening..batches.len() - closing,
             batches.len() - closing..batches.len(),
@@ -557,10 +562,8 @@ impl Simulation {
         };
         // The within-row batches `group` on row `row`.
         let project_row = |group: Range<usize>, row: usize| {
-            for rows_of_batch in row_strips[group].iter().flatten() {
-                strips[rows_of_batch[row].clone()]
-                    .iter()
-                    .for_each(project_one);
+            for (by_row, _) in &by_last_row[group] {
+                strips[by_row[row].clone()].iter().for_each(project_one);
             }
         };
         let particles_of = |row: usize| row * columns..(row + 1) * columns;
@@ -598,31 +601,31 @@ impl Simulation {
             1
         };
         // The sweeps as one wavefront: the batches of every sweep, each followed by the sweep's end.
-        let wavefront = by_last_row.as_ref().and_then(|by_last_row| {
+        let wavefront = 'plan: {
+            // Decided before the plan is built, so that a small cloth's sub-step builds none.
+            let parts = match sweep_order {
+                GridSweep::Passes | GridSweep::BatchByBatch => break 'plan None,
+                GridSweep::Wavefront { parts } => parts,
+                // Once the cloth outgrows the caches (and, below, with threads only when the seams,
+                // which run on one thread each, are a small share of the rows).
+                GridSweep::Auto if positions.len() < WAVEFRONT_MIN_PARTICLES => break 'plan None,
+                GridSweep::Auto => threads,
+            };
             let sweep_spans = by_last_row.iter().map(|(_, span)| *span).chain([0]);
             let spans: Vec<usize> = (0..iterations).flat_map(|_| sweep_spans.clone()).collect();
             let plan = Wavefront::new(spans, rows);
-            let parts = match sweep_order {
-                GridSweep::Passes => return None,
-                // A test's fixed order: refusing it would let the test compare pass by pass with itself.
-                GridSweep::Wavefront { parts } => {
-                    assert!(plan.fits(parts), "{parts} parts do not fit {rows} rows");
-                    parts
-                }
-                // Once the cloth outgrows the caches, and with threads only when the seams, which run
-                // on one thread each, are a small share of the rows.
-                GridSweep::Auto => {
-                    let pays = positions.len() >= WAVEFRONT_MIN_PARTICLES
-                        && (threads == 1
-                            || rows >= WAVEFRONT_ROWS_PER_DEPTH * threads * plan.depth());
-                    if !pays {
-                        return None;
-                    }
-                    threads
-                }
-            };
+            if sweep_order == GridSweep::Auto
+                && threads > 1
+                && rows < WAVEFRONT_ROWS_PER_DEPTH * threads * plan.depth()
+            {
+                break 'plan None;
+            }
+            // A test's fixed order: refusing it would let the test compare pass by pass with itself.
+            if let GridSweep::Wavefront { parts } = sweep_order {
+                assert!(plan.fits(parts), "{parts} parts do not fit {rows} rows");
+            }
             plan.fits(parts).then_some((plan, parts))
-        });
+        };
         // First pass: the forces (unless summed already) and the prediction, then, pass by pass, the
         // opening batches, row by row. The attachments then gather the pins' predicted positions, which no
         // projection moves (inverse mass 0).
@@ -647,9 +650,6 @@ impl Simulation {
         if let Some((plan, parts_count)) = wavefront {
             // Items per sweep: the batches, then the sweep's end.
             let per_sweep = batches.len() + 1;
-            let by_last_row = by_last_row
-                .as_ref()
-                .expect("a wavefront plan has rows by last row");
             let run_item = |item: usize, row: usize| {
                 let (sweep, batch) = (item / per_sweep, item % per_sweep);
                 if batch < batches.len() {
@@ -802,9 +802,9 @@ mod tests {
                 let height = GridSpec::default().height;
                 let mut sim = windy_flag(23, 13, height, method, false);
                 if batch_by_batch {
-                    let grid = sim.grid_constraints.as_mut().unwrap();
-                    assert!(grid.row_strips.iter().any(Option::is_some));
-                    grid.row_strips.iter_mut().for_each(|r| *r = None);
+                    let grid = sim.grid_constraints.as_ref().unwrap();
+                    assert!(grid.by_last_row.iter().any(|(_, span)| *span == 0));
+                    sim.grid_sweep = crate::sim::GridSweep::BatchByBatch;
                 }
                 if forces_beforehand {
                     sim.grid_triangulation = None; // the general triangle path, summed into `forces`
@@ -856,8 +856,8 @@ mod tests {
         let rows = 131;
         // The batches' row spans, as the schedule's own test takes them (`wavefront.rs`).
         let sim = windy_flag(9, rows, 3.0, Method::default(), false);
-        let by_last_row = sim.grid_constraints.as_ref().unwrap().by_last_row.as_ref();
-        let spans: Vec<usize> = by_last_row.unwrap().iter().map(|(_, span)| *span).collect();
+        let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
+        let spans: Vec<usize> = by_last_row.iter().map(|(_, span)| *span).collect();
         assert_eq!(spans, [0, 0, 2, 2, 1, 1, 1, 1, 1, 1, 0, 0]);
         for (method, sweeps, part_counts) in cases {
             // `threads` > 1: on a pool of that many threads, the parallel code paths forced on.

@@ -175,6 +175,8 @@ pub(crate) enum GridSweep {
     Auto,
     /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
     Passes,
+    /// A pass over the cloth per batch, the batches along rows too.
+    BatchByBatch,
     /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they fit.
     Wavefront { parts: usize },
 }

@@ -159,11 +159,7 @@ pub fn ablation(
         Variant {
             part: "spring damping",
             setting: "off (all three families)".into(),
-            scene: with_params(scene, |p| {
-                p.stretch.damping = 0.0;
-                p.shear.damping = 0.0;
-                p.bend.damping = 0.0;
-            }),
+            scene: with_params(scene, SimParams::remove_spring_damping),
             method,
         },
         Variant {
