@@ -96,15 +96,7 @@ impl GridConstraints {
         if columns < 2 || rows < 2 || springs.len() != shape.spring_pairs().len() {
             return None;
         }
-        let mut by_ends = std::collections::HashMap::with_capacity(springs.len());
-        for spring in springs {
-            if by_ends
-                .insert((spring.a as usize, spring.b as usize), *spring)
-                .is_some()
-            {
-                return None; // a repeated spring: not the grid's set
-            }
-        }
+        let by_ends = SpringsByEnds::new(columns, columns * rows, springs)?;
         let mut grid = GridConstraints::default();
         let mut batch: Vec<Strip> = Vec::new();
         // Adds a strip of constraints with the given ends, each found among `springs` with `kind`.
@@ -126,7 +118,7 @@ impl GridConstraints {
                 kind,
             };
             for k in 0..count {
-                let spring = by_ends.get(&strip.ends(k))?;
+                let spring = by_ends.get(springs, strip.ends(k))?;
                 if spring.kind != kind {
                     return None;
                 }
@@ -242,6 +234,53 @@ impl GridConstraints {
             })
             .collect::<Option<_>>()?;
         Some(grid)
+    }
+}
+
+/// The springs of a grid cloth by their ends `(a, b)`, for the strips to look up. Every spring of a grid
+/// joins a particle to one a fixed offset further on (1 or 2 along a row, `columns` ± 1 across a cell,
+/// `columns` or `2·columns` down), so a table of `particles × offsets` entries holds them all: built in
+/// one pass, without the hashing (a hash map of the 3 million springs of 10⁶ particles took about 4 s to
+/// build, most of `Simulation::new`).
+struct SpringsByEnds {
+    /// The distinct offsets `b − a` of the grid's springs, ascending.
+    offsets: Vec<usize>,
+    /// Per particle `a` and offset: the index in `springs` of the spring from `a`, or `u32::MAX`.
+    index: Vec<u32>,
+}
+
+impl SpringsByEnds {
+    /// `None` when a spring does not join a particle to one at a grid offset further on, or when two
+    /// springs join the same ends: then they are not the grid's own set.
+    fn new(columns: usize, particles: usize, springs: &[Spring]) -> Option<SpringsByEnds> {
+        let mut offsets = vec![1, 2, columns - 1, columns, columns + 1, 2 * columns];
+        offsets.sort_unstable();
+        offsets.dedup();
+        let mut table = SpringsByEnds {
+            index: vec![u32::MAX; particles * offsets.len()],
+            offsets,
+        };
+        for (i, spring) in springs.iter().enumerate() {
+            let slot = table.slot(spring.a as usize, spring.b as usize)?;
+            if table.index[slot] != u32::MAX {
+                return None; // a repeated spring
+            }
+            table.index[slot] = u32::try_from(i).ok()?;
+        }
+        Some(table)
+    }
+
+    fn slot(&self, a: usize, b: usize) -> Option<usize> {
+        let offset = b.checked_sub(a)?;
+        let k = self.offsets.iter().position(|&o| o == offset)?;
+        let slot = a * self.offsets.len() + k;
+        (slot < self.index.len()).then_some(slot)
+    }
+
+    /// The spring joining `a` to `b`, if any.
+    fn get<'s>(&self, springs: &'s [Spring], (a, b): (usize, usize)) -> Option<&'s Spring> {
+        let i = self.index[self.slot(a, b)?];
+        springs.get(i as usize)
     }
 }
 
@@ -570,6 +609,33 @@ mod tests {
         let mut other_kind = springs.clone();
         other_kind[0].kind = SpringKind::Bend;
         assert!(GridConstraints::new(shape, &other_kind).is_none());
+        // The same count, but one spring twice in place of another.
+        let mut repeated = springs.clone();
+        repeated[1] = repeated[0];
+        assert!(GridConstraints::new(shape, &repeated).is_none());
+        // A pair at a grid offset that is no grid neighbour: the end of one row to the start of the next.
+        let mut wrapped = springs.clone();
+        let end_of_row = shape.index(0, shape.columns - 1) as u32;
+        let i = wrapped
+            .iter()
+            .position(|s| s.kind == SpringKind::Stretch && s.b == s.a + 1)
+            .unwrap();
+        (wrapped[i].a, wrapped[i].b) = (end_of_row, end_of_row + 1);
+        assert!(GridConstraints::new(shape, &wrapped).is_none());
+        // An end beyond the last particle.
+        let mut beyond = springs.clone();
+        let last = (shape.columns * shape.rows) as u32;
+        (beyond[i].a, beyond[i].b) = (last, last + 1);
+        assert!(GridConstraints::new(shape, &beyond).is_none());
+        // Grids so narrow that the offsets coincide (2 columns: 1 = columns − 1, 2 = columns; 3 columns:
+        // 2 = columns − 1) still take their own springs.
+        for (columns, rows) in [(2, 2), (2, 5), (3, 3), (3, 6)] {
+            let (shape, springs) = grid_springs(columns, rows);
+            assert!(
+                GridConstraints::new(shape, &springs).is_some(),
+                "{columns}×{rows}"
+            );
+        }
     }
 
     /// The vectorised strip loops give the bits of [`project`] called one constraint at a time, for

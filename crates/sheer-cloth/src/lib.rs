@@ -27,6 +27,7 @@ mod grid_constraints;
 mod grid_wind;
 mod mass_spring;
 mod model;
+mod nearest;
 mod parallel;
 mod params;
 mod position_based;

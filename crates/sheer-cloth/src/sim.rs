@@ -13,6 +13,7 @@ use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
 use crate::grid_constraints::GridConstraints;
 use crate::grid_wind::{BodyForce, add_grid_triangle_forces, grid_triangle_forces};
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
+use crate::nearest::nearest_points;
 use crate::parallel::{TeamSlot, fill, first_index, sum};
 use crate::params::{Method, SimParams, SpringParams};
 use crate::wind::{WindField, corner_share_of_triangle_force};
@@ -292,22 +293,12 @@ impl Simulation {
         let spring_count = springs.len();
         let triangle_count = model.triangles.len();
         // Nearest pinned particle at rest, by straight-line distance (the geodesic on a flat sheet).
-        let (tether_anchors, tether_lengths) = (0..n)
-            .map(|i| {
-                if model.pinned[i] {
-                    return (0, f64::INFINITY);
-                }
-                pinned_indices
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &p)| {
-                        (
-                            k as u32,
-                            model.positions[i].distance(model.positions[p as usize]),
-                        )
-                    })
-                    .min_by(|x, y| x.1.total_cmp(&y.1))
-                    .unwrap_or((0, f64::INFINITY))
+        let (tether_anchors, tether_lengths) = nearest_points(&pin_targets, &model.positions)
+            .into_iter()
+            .zip(&model.pinned)
+            .map(|(nearest, &pinned)| match nearest {
+                Some(anchor) if !pinned => anchor,
+                _ => (0, f64::INFINITY),
             })
             .unzip();
         Ok(Simulation {
