@@ -8,7 +8,8 @@
 //! - **apart** strips join a run of particles to another run further on (`a + k` to `b + k`): vertical
 //!   stretch and bending, the two shear diagonals, all one row (pair) at a time;
 //! - **along** strips join particles within one row: stretch `(2m, 2m + 1)` and bending
-//!   `(4m + j, 4m + j + 2)`, `j ∈ {0, 1}`.
+//!   `(4m + j, 4m + j + 2)`, `j ∈ {0, 1}`; with AVX-512 they go eight at a time through explicit
+//!   permutes (`along_avx512.rs`), where the vectoriser would gather and scatter.
 //!
 //! Within a batch no two constraints share a particle, so the order inside it does not matter and the
 //! compiler may vectorise each strip ([`by_cpu!`]); the threads may share the strips with the same
@@ -493,10 +494,57 @@ by_cpu! {
     }
 }
 
+/// Projects an along strip of `HALF` interleaved constraints per chunk of `CHUNK = 2·HALF` particles:
+/// constraint `m·HALF + j` joins `x[m][j]` and `x[m][j + HALF]`. With AVX-512 through
+/// [`along_avx512`](crate::along_avx512), eight constraints at a time; otherwise through the vectorised
+/// loop. Same bits either way.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project_along<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+    const HALF: usize,
+    const CHUNK: usize,
+>(
+    x: &mut [[DVec3; CHUNK]],
+    previous: &[[DVec3; CHUNK]],
+    inverse_masses: &[[f64; CHUNK]],
+    rest_lengths: &[[f64; HALF]],
+    inverse_denominators: &[[f64; HALF]],
+    lambdas: &mut [[f64; HALF]],
+    family: FamilyConstants,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe {
+            crate::along_avx512::project::<PBD, MULTIPLIERS, DAMPED, HALF>(
+                x.as_flattened_mut(),
+                previous.as_flattened(),
+                inverse_masses.as_flattened(),
+                rest_lengths.as_flattened(),
+                inverse_denominators.as_flattened(),
+                lambdas.as_flattened_mut(),
+                family,
+            )
+        };
+        return;
+    }
+    project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF, CHUNK>(
+        x,
+        previous,
+        inverse_masses,
+        rest_lengths,
+        inverse_denominators,
+        lambdas,
+        family,
+    );
+}
+
 by_cpu! {
-    /// Projects an along strip of `HALF` interleaved constraints per chunk of `CHUNK = 2·HALF` particles:
-    /// constraint `m·HALF + j` joins `x[m][j]` and `x[m][j + HALF]`.
-    pub(crate) fn project_along<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool, const HALF: usize, const CHUNK: usize>(
+    /// [`project_along`] one chunk at a time, in a loop the compiler vectorises (with gathers and
+    /// scatters: the ends of a chunk's constraints interleave).
+    pub(crate) fn project_along_loop<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool, const HALF: usize, const CHUNK: usize>(
         x: &mut [[DVec3; CHUNK]],
         previous: &[[DVec3; CHUNK]],
         inverse_masses: &[[f64; CHUNK]],
@@ -642,7 +690,9 @@ mod tests {
     /// PBD, XPBD with and without multipliers, with inactive constraints and coincident ends.
     #[test]
     fn strip_loops_match_the_one_constraint_projection_bit_for_bit() {
-        let n = 48;
+        // 26 pair chunks and 13 quad chunks: three whole blocks of eight constraints (AVX-512) and a
+        // remainder each.
+        let n = 52;
         let jitter = |i: usize, k: u64| {
             let mut z = (i as u64 + 7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ k;
             z = (z ^ (z >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -731,6 +781,7 @@ mod tests {
                     family,
                 );
             }
+            // The dispatching function (AVX-512 blocks where the CPU has it) and the loop alone.
             let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
             project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
                 got.as_chunks_mut().0,
@@ -743,6 +794,22 @@ mod tests {
             );
             assert_eq!(bits(&got), bits(&expected), "along pairs, PBD {PBD}");
             assert_eq!(got_lambdas, expected_lambdas);
+            let (mut looped, mut looped_lambdas) = (x.to_vec(), lambdas0.clone());
+            project_along_loop::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
+                looped.as_chunks_mut().0,
+                previous.as_chunks().0,
+                w.as_chunks().0,
+                rest.as_chunks().0,
+                denominators.as_chunks().0,
+                looped_lambdas.as_chunks_mut().0,
+                family,
+            );
+            assert_eq!(
+                bits(&looped),
+                bits(&expected),
+                "along pairs (loop), PBD {PBD}"
+            );
+            assert_eq!(looped_lambdas, expected_lambdas);
             // Along, quads: constraint 2m + j joins 4m + j and 4m + j + 2.
             let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
             for c in 0..half {
@@ -762,7 +829,8 @@ mod tests {
                     family,
                 );
             }
-            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0);
+            // The dispatching function (AVX-512 blocks where the CPU has it) and the loop alone.
+            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
             project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
                 got.as_chunks_mut().0,
                 previous.as_chunks().0,
@@ -774,6 +842,22 @@ mod tests {
             );
             assert_eq!(bits(&got), bits(&expected), "along quads, PBD {PBD}");
             assert_eq!(got_lambdas, expected_lambdas);
+            let (mut looped, mut looped_lambdas) = (x.to_vec(), lambdas0.clone());
+            project_along_loop::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
+                looped.as_chunks_mut().0,
+                previous.as_chunks().0,
+                w.as_chunks().0,
+                rest.as_chunks().0,
+                denominators.as_chunks().0,
+                looped_lambdas.as_chunks_mut().0,
+                family,
+            );
+            assert_eq!(
+                bits(&looped),
+                bits(&expected),
+                "along quads (loop), PBD {PBD}"
+            );
+            assert_eq!(looped_lambdas, expected_lambdas);
             assert_ne!(bits(&got), bits(x), "the constraints moved the particles");
         }
         check::<true, false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
@@ -785,6 +869,104 @@ mod tests {
         };
         check::<false, false, false>(&x, &previous, &w, &rest, &denominators, undamped, &bits);
         check::<false, true, false>(&x, &previous, &w, &rest, &denominators, undamped, &bits);
+    }
+
+    /// An along strip of any length (whole blocks of eight constraints and a partial one of every size)
+    /// gives the loop's bits and leaves the particles and multipliers after it untouched.
+    #[test]
+    fn along_strips_of_every_length_match_the_loop_and_touch_nothing_beyond() {
+        let n = 80;
+        let x: Vec<DVec3> = (0..n)
+            .map(|i| {
+                let wobble = ((i * 7919) % 13) as f64 * 1e-3;
+                DVec3::new(0.02 * i as f64, wobble, 0.5 * wobble)
+            })
+            .collect();
+        let previous: Vec<DVec3> = x.iter().map(|p| *p - DVec3::splat(1e-4)).collect();
+        let w: Vec<f64> = (0..n).map(|i| 1e4 + i as f64).collect();
+        let rest = vec![0.019; n / 2];
+        let denominators = vec![2e-5; n / 2];
+        let lambdas0: Vec<f64> = (0..n / 2).map(|k| 1e-5 * k as f64).collect();
+        let family = FamilyConstants {
+            scaled_compliance: 9.0,
+            gamma: 0.3,
+        };
+        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+            v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+        };
+        #[allow(clippy::too_many_arguments)]
+        fn run<const HALF: usize, const CHUNK: usize>(
+            chunks: usize,
+            looped: bool,
+            x: &[DVec3],
+            previous: &[DVec3],
+            w: &[f64],
+            rest: &[f64],
+            denominators: &[f64],
+            lambdas: &[f64],
+            family: FamilyConstants,
+        ) -> (Vec<DVec3>, Vec<f64>) {
+            let (mut x, mut lambdas) = (x.to_vec(), lambdas.to_vec());
+            let project = if looped {
+                project_along_loop::<false, true, true, HALF, CHUNK>
+            } else {
+                project_along::<false, true, true, HALF, CHUNK>
+            };
+            project(
+                &mut x.as_chunks_mut().0[..chunks],
+                &previous.as_chunks().0[..chunks],
+                &w.as_chunks().0[..chunks],
+                &rest.as_chunks().0[..chunks],
+                &denominators.as_chunks().0[..chunks],
+                &mut lambdas.as_chunks_mut().0[..chunks],
+                family,
+            );
+            (x, lambdas)
+        }
+        for chunks in 0..=19 {
+            let pairs = |looped| {
+                run::<1, 2>(
+                    chunks,
+                    looped,
+                    &x,
+                    &previous,
+                    &w,
+                    &rest,
+                    &denominators,
+                    &lambdas0,
+                    family,
+                )
+            };
+            let (got, expected) = (pairs(false), pairs(true));
+            assert_eq!(bits(&got.0), bits(&expected.0), "pairs, {chunks} chunks");
+            assert_eq!(got.1, expected.1, "pairs, {chunks} chunks");
+            assert_eq!(bits(&got.0[2 * chunks..]), bits(&x[2 * chunks..]));
+            let quads = |looped| {
+                run::<2, 4>(
+                    chunks,
+                    looped,
+                    &x,
+                    &previous,
+                    &w,
+                    &rest,
+                    &denominators,
+                    &lambdas0,
+                    family,
+                )
+            };
+            let (got, expected) = (quads(false), quads(true));
+            assert_eq!(bits(&got.0), bits(&expected.0), "quads, {chunks} chunks");
+            assert_eq!(got.1, expected.1, "quads, {chunks} chunks");
+            assert_eq!(bits(&got.0[4 * chunks..]), bits(&x[4 * chunks..]));
+            assert_eq!(got.1[2 * chunks..], lambdas0[2 * chunks..]);
+            if chunks > 0 {
+                assert_ne!(
+                    bits(&got.0),
+                    bits(&x),
+                    "the constraints moved the particles"
+                );
+            }
+        }
     }
 
     /// Leaving the damping term out changes nothing when the family has none (γ = 0), and something

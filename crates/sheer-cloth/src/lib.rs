@@ -22,6 +22,8 @@
 //!
 //! Units: metres, kilograms, seconds, newtons. Results are bit-identical whatever rayon's thread count.
 
+#[cfg(target_arch = "x86_64")]
+mod along_avx512;
 mod error;
 mod grid_constraints;
 mod grid_wind;
