@@ -291,6 +291,12 @@ pub(crate) unsafe fn project<
     lambdas: &mut [f64],
     family: FamilyConstants,
 ) {
+    const {
+        assert!(
+            HALF == 1 || HALF == 2,
+            "along strips pair neighbours 1 or 2 apart"
+        )
+    };
     let constraints = rest_lengths.len();
     assert!(
         x.len() == 2 * constraints && previous.len() == x.len() && inverse_masses.len() == x.len()
