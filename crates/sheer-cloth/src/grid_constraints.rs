@@ -686,6 +686,17 @@ mod tests {
         }
     }
 
+    /// [`project_along`]'s signature, for a test to hold it and its loop side by side.
+    type AlongProjection<const HALF: usize, const CHUNK: usize> = fn(
+        &mut [[DVec3; CHUNK]],
+        &[[DVec3; CHUNK]],
+        &[[f64; CHUNK]],
+        &[[f64; HALF]],
+        &[[f64; HALF]],
+        &mut [[f64; HALF]],
+        FamilyConstants,
+    );
+
     /// The vectorised strip loops give the bits of [`project`] called one constraint at a time, for
     /// PBD, XPBD with and without multipliers, with inactive constraints and coincident ends.
     #[test]
@@ -782,34 +793,31 @@ mod tests {
                 );
             }
             // The dispatching function (AVX-512 blocks where the CPU has it) and the loop alone.
-            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
-            project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
-                got.as_chunks_mut().0,
-                previous.as_chunks().0,
-                w.as_chunks().0,
-                rest.as_chunks().0,
-                denominators.as_chunks().0,
-                got_lambdas.as_chunks_mut().0,
-                family,
-            );
-            assert_eq!(bits(&got), bits(&expected), "along pairs, PBD {PBD}");
-            assert_eq!(got_lambdas, expected_lambdas);
-            let (mut looped, mut looped_lambdas) = (x.to_vec(), lambdas0.clone());
-            project_along_loop::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
-                looped.as_chunks_mut().0,
-                previous.as_chunks().0,
-                w.as_chunks().0,
-                rest.as_chunks().0,
-                denominators.as_chunks().0,
-                looped_lambdas.as_chunks_mut().0,
-                family,
-            );
-            assert_eq!(
-                bits(&looped),
-                bits(&expected),
-                "along pairs (loop), PBD {PBD}"
-            );
-            assert_eq!(looped_lambdas, expected_lambdas);
+            let projections = [
+                (
+                    "",
+                    project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2> as AlongProjection<1, 2>,
+                ),
+                (
+                    " (loop)",
+                    project_along_loop::<PBD, MULTIPLIERS, DAMPED, 1, 2>,
+                ),
+            ];
+            for (path, project) in projections {
+                let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
+                project(
+                    got.as_chunks_mut().0,
+                    previous.as_chunks().0,
+                    w.as_chunks().0,
+                    rest.as_chunks().0,
+                    denominators.as_chunks().0,
+                    got_lambdas.as_chunks_mut().0,
+                    family,
+                );
+                assert_eq!(bits(&got), bits(&expected), "along pairs{path}, PBD {PBD}");
+                assert_eq!(got_lambdas, expected_lambdas);
+                assert_ne!(bits(&got), bits(x), "the constraints moved the particles");
+            }
             // Along, quads: constraint 2m + j joins 4m + j and 4m + j + 2.
             let (mut expected, mut expected_lambdas) = (x.to_vec(), lambdas0.clone());
             for c in 0..half {
@@ -830,35 +838,31 @@ mod tests {
                 );
             }
             // The dispatching function (AVX-512 blocks where the CPU has it) and the loop alone.
-            let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
-            project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
-                got.as_chunks_mut().0,
-                previous.as_chunks().0,
-                w.as_chunks().0,
-                rest.as_chunks().0,
-                denominators.as_chunks().0,
-                got_lambdas.as_chunks_mut().0,
-                family,
-            );
-            assert_eq!(bits(&got), bits(&expected), "along quads, PBD {PBD}");
-            assert_eq!(got_lambdas, expected_lambdas);
-            let (mut looped, mut looped_lambdas) = (x.to_vec(), lambdas0.clone());
-            project_along_loop::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
-                looped.as_chunks_mut().0,
-                previous.as_chunks().0,
-                w.as_chunks().0,
-                rest.as_chunks().0,
-                denominators.as_chunks().0,
-                looped_lambdas.as_chunks_mut().0,
-                family,
-            );
-            assert_eq!(
-                bits(&looped),
-                bits(&expected),
-                "along quads (loop), PBD {PBD}"
-            );
-            assert_eq!(looped_lambdas, expected_lambdas);
-            assert_ne!(bits(&got), bits(x), "the constraints moved the particles");
+            let projections = [
+                (
+                    "",
+                    project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4> as AlongProjection<2, 4>,
+                ),
+                (
+                    " (loop)",
+                    project_along_loop::<PBD, MULTIPLIERS, DAMPED, 2, 4>,
+                ),
+            ];
+            for (path, project) in projections {
+                let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
+                project(
+                    got.as_chunks_mut().0,
+                    previous.as_chunks().0,
+                    w.as_chunks().0,
+                    rest.as_chunks().0,
+                    denominators.as_chunks().0,
+                    got_lambdas.as_chunks_mut().0,
+                    family,
+                );
+                assert_eq!(bits(&got), bits(&expected), "along quads{path}, PBD {PBD}");
+                assert_eq!(got_lambdas, expected_lambdas);
+                assert_ne!(bits(&got), bits(x), "the constraints moved the particles");
+            }
         }
         check::<true, false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);
         check::<false, false, true>(&x, &previous, &w, &rest, &denominators, family, &bits);

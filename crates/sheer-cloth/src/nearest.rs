@@ -108,19 +108,31 @@ impl Tree {
     /// Nearest point to `query` (all coordinates finite).
     fn nearest(&self, points: &[DVec3], query: DVec3) -> (u32, f64) {
         let mut best = (u32::MAX, f64::INFINITY);
-        self.search(points, query, 0, &mut best);
+        self.search(points, query, 0, self.bound(query, 0), &mut best);
         best
     }
 
-    fn search(&self, points: &[DVec3], query: DVec3, node: usize, best: &mut (u32, f64)) {
+    /// The distance (m) from `query` to `node`'s box: every point of the node is at least this far away.
+    fn bound(&self, query: DVec3, node: usize) -> f64 {
         let node = &self.nodes[node];
-        // Every point of the node is at least this far away. The margin covers the rounding of the
-        // computed distances (a few ulps) and their underflow, so that no point that could equal or beat
-        // the best is skipped: the answer stays the scan's.
-        let bound = query.distance(query.clamp(node.low, node.high));
+        query.distance(query.clamp(node.low, node.high))
+    }
+
+    /// Searches `node`, `bound` away from `query` ([`Tree::bound`]).
+    fn search(
+        &self,
+        points: &[DVec3],
+        query: DVec3,
+        node: usize,
+        bound: f64,
+        best: &mut (u32, f64),
+    ) {
+        // The margin covers the rounding of the computed distances (a few ulps) and their underflow, so
+        // that no point that could equal or beat the best is skipped: the answer stays the scan's.
         if bound > best.1 * (1.0 + 1e-9) + 1e-150 {
             return;
         }
+        let node = &self.nodes[node];
         match node.halves {
             None => {
                 for &k in &self.order[node.start..node.end] {
@@ -132,17 +144,15 @@ impl Tree {
             }
             Some((lower, upper)) => {
                 // The nearer box first, so that the farther one is more often skipped.
-                let gap = |n: usize| {
-                    let n = &self.nodes[n];
-                    query.distance_squared(query.clamp(n.low, n.high))
-                };
-                let (first, second) = if gap(lower) <= gap(upper) {
-                    (lower, upper)
+                let (lower_bound, upper_bound) =
+                    (self.bound(query, lower), self.bound(query, upper));
+                let [first, second] = if lower_bound <= upper_bound {
+                    [(lower, lower_bound), (upper, upper_bound)]
                 } else {
-                    (upper, lower)
+                    [(upper, upper_bound), (lower, lower_bound)]
                 };
-                self.search(points, query, first, best);
-                self.search(points, query, second, best);
+                self.search(points, query, first.0, first.1, best);
+                self.search(points, query, second.0, second.1, best);
             }
         }
     }
