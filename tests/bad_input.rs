@@ -67,6 +67,54 @@ fn times_out_of_range_are_refused_before_any_simulation() {
 }
 
 #[test]
+fn benchmark_sizes_beyond_the_scene_limits_are_refused_before_any_work() {
+    // Each of these panicked (capacity overflow, a float too large for a `Duration`), aborted on a
+    // failed allocation, or ran for hours.
+    let sim = |extra: &[&'static str]| {
+        let mut args = vec!["bench", "sim", "--method", "pbd", "--threads", "1"];
+        args.extend_from_slice(extra);
+        args
+    };
+    for grid in [
+        "99999999999x99999999999",
+        "100000x100000",
+        "4294967296x2",
+        "1025x2",
+        "2x1025",
+    ] {
+        assert_one_line_error(
+            &sim(&["--grid", grid]),
+            1,
+            &["--grid", "must lie in [2, 1024]"],
+        );
+    }
+    for seconds in ["1e20", "1e308", "3601"] {
+        assert_one_line_error(
+            &sim(&["--grid", "16x11", "--seconds", seconds]),
+            1,
+            &["--seconds must lie in [0, 3600]"],
+        );
+        assert_one_line_error(
+            &["bench", "render", "--seconds", seconds],
+            1,
+            &["--seconds must lie in [0, 3600]"],
+        );
+    }
+    for substeps in ["4294967295", "100001"] {
+        assert_one_line_error(
+            &sim(&["--grid", "16x11", "--substeps", substeps]),
+            1,
+            &["--substeps must lie in [1, 100000]"],
+        );
+    }
+    assert_one_line_error(
+        &sim(&["--grid", "16x11", "--iterations", "10001"]),
+        1,
+        &["--iterations must lie in [1, 10000]"],
+    );
+}
+
+#[test]
 fn options_that_do_not_go_together_are_one_line_usage_errors() {
     let out = scratch("usage").join("frame.png");
     let out = out.to_str().unwrap();
@@ -104,6 +152,10 @@ fn options_that_do_not_go_together_are_one_line_usage_errors() {
     );
     // Missing required arguments are listed on the same line.
     assert_one_line_error(&["figure2"], 2, &["--out"]);
+    // Refused before rendering (an .exr name failed after four renders, in the image crate's words).
+    for name in ["fig.exr", "fig"] {
+        assert_one_line_error(&["figure2", "--out", name], 1, &["must end in .png"]);
+    }
 }
 
 #[test]
@@ -186,5 +238,25 @@ fn images_that_cannot_be_read_are_errors_naming_their_key() {
                 &[key, image, why],
             );
         }
+    }
+}
+
+#[test]
+fn a_study_into_a_folder_it_cannot_write_is_refused_before_it_runs() {
+    // This ran the whole sweep and then failed on its first file.
+    for out in ["/proc/sheer-study", "/proc"] {
+        assert_one_line_error(
+            &[
+                "study",
+                "choose",
+                "--quick",
+                "--max-coverage-difference",
+                "10",
+                "--out",
+                out,
+            ],
+            1,
+            &["cannot read or write", out],
+        );
     }
 }

@@ -210,6 +210,25 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
         std::fs::read_to_string(dir.join("choice.toml")).unwrap(),
         full
     );
+    // A file that is no choice at all is refused for what it is (this said "a full study's choice").
+    for (text, reason) in [
+        ("quick = [", "is not TOML"),
+        ("seed = 3\n", "has no `quick` flag"),
+    ] {
+        std::fs::write(dir.join("choice.toml"), text).unwrap();
+        let refused = sheer(&args);
+        assert_eq!(refused.status.code(), Some(1));
+        let stderr = String::from_utf8(refused.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains("is not a study's choice file") && stderr.contains(reason),
+            "{stderr}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("choice.toml")).unwrap(),
+            text
+        );
+    }
     args.push("--force");
     let out = sheer(&args);
     assert!(

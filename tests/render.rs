@@ -423,3 +423,37 @@ fn all_orders_table_per_vertex_sits_between_per_fragment_and_the_per_vertex_path
         assert!(p99 < path_p99 && median < path_median);
     }
 }
+
+#[test]
+fn a_sequence_starts_at_its_time_and_its_first_frame_is_that_single_frame() {
+    // `--time` was ignored for sequences: every sequence started at t = 0.
+    let dir = scratch("sequence-time");
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--format", "exr"];
+        args.extend_from_slice(extra);
+        sheer_ok(&args);
+    };
+    let (at_zero, at_half) = (dir.join("zero"), dir.join("half"));
+    render(&["--frames", "1", "--out-dir", at_zero.to_str().unwrap()]);
+    render(&[
+        "--frames",
+        "2",
+        "--out-dir",
+        at_half.to_str().unwrap(),
+        "--time",
+        "0.5",
+    ]);
+    let single = dir.join("single.exr");
+    sheer_ok(&["render", "--out", single.to_str().unwrap(), "--time", "0.5"]);
+    let first = read_exr(&at_half.join("frame_0000.exr"));
+    assert_eq!(first.as_raw(), read_exr(&single).as_raw());
+    assert_ne!(
+        first.as_raw(),
+        read_exr(&at_zero.join("frame_0000.exr")).as_raw()
+    );
+    // The next frame is 1/fps later, not the same frame again.
+    assert_ne!(
+        first.as_raw(),
+        read_exr(&at_half.join("frame_0001.exr")).as_raw()
+    );
+}

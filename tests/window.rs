@@ -3,9 +3,14 @@
 //! flag.
 
 use std::process::Command;
+use std::sync::Mutex;
+
+/// One window at a time: two `xvfb-run -a` started together may pick the same display.
+static DISPLAY: Mutex<()> = Mutex::new(());
 
 #[test]
 fn the_window_runs_frames_and_saves_a_screenshot_of_panel_and_flag() {
+    let _display = DISPLAY.lock().unwrap_or_else(|e| e.into_inner());
     let dir = std::env::temp_dir().join(format!("sheer-window-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let shot = dir.join("window.png");
@@ -78,4 +83,43 @@ fn the_window_runs_frames_and_saves_a_screenshot_of_panel_and_flag() {
         })
         .count();
     assert!(red > 300, "no red cross in the window: {red} red pixels");
+}
+
+#[test]
+fn a_screenshot_that_cannot_be_written_fails_the_scripted_run() {
+    let _display = DISPLAY.lock().unwrap_or_else(|e| e.into_inner());
+    let run = |shot: &str| {
+        Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 1280x800x24"])
+            .arg(env!("CARGO_BIN_EXE_sheer"))
+            .args(["--frames", "2", "--screenshot", shot])
+            .output()
+            .expect("xvfb-run must be installed (Debian package xvfb; .ci/run installs it)")
+    };
+    // Refused before the window opens: not a PNG name, or no such directory.
+    let dir = std::env::temp_dir().join(format!("sheer-window-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let jpg = dir.join("window.jpg");
+    let missing = dir.join("absent").join("window.png");
+    for (shot, needle) in [
+        (jpg.to_str().unwrap(), "must end in .png"),
+        (missing.to_str().unwrap(), "does not exist"),
+        // Only found when the window writes it (these exited 0 with nothing said).
+        (
+            "/proc/sheer-window.png",
+            "cannot write /proc/sheer-window.png",
+        ),
+    ] {
+        let out = run(shot);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        // sheer's own message is its last line (Xvfb and Mesa may print lines of their own before it).
+        let last = stderr.lines().last().unwrap_or("");
+        assert_eq!(out.status.code(), Some(1), "{shot}: {stderr}");
+        assert!(
+            last.starts_with("error: ") && last.contains(needle),
+            "{shot}: {stderr}"
+        );
+    }
+    assert!(!jpg.exists(), "a refused screenshot left a file");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

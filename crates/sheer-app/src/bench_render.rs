@@ -42,12 +42,7 @@ struct Row {
 const FRAMES_PER_ROUND: u32 = 3;
 
 pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
-    if !(args.seconds.is_finite() && args.seconds >= 0.0) {
-        return Err(CliError::new(format!(
-            "--seconds must be ≥ 0, got {}",
-            args.seconds
-        )));
-    }
+    crate::bench_sim::check_seconds(args.seconds)?;
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;

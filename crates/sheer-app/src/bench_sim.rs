@@ -9,6 +9,7 @@ use sheer_cloth::glam::DVec3;
 use sheer_cloth::{ClothModel, GridSpec, Method, SimParams, Simulation};
 
 use crate::CliError;
+use crate::scene::{MAX_GRID_SIDE, MAX_ITERATIONS, MAX_SUBSTEPS};
 
 const FRAME: f64 = 1.0 / 60.0;
 
@@ -114,6 +115,20 @@ pub fn with_knobs(method: Method, substeps: Option<u32>, iterations: Option<u32>
     }
 }
 
+/// Longest `--seconds` of the benchmarks: an hour per case, so that a typo does not hang the program.
+pub const MAX_BENCH_SECONDS: f64 = 3600.0;
+
+/// `--seconds` of `sheer bench sim` and `sheer bench render`: in [0, [`MAX_BENCH_SECONDS`]].
+pub fn check_seconds(seconds: f64) -> Result<(), CliError> {
+    if seconds.is_finite() && (0.0..=MAX_BENCH_SECONDS).contains(&seconds) {
+        Ok(())
+    } else {
+        Err(CliError::new(format!(
+            "--seconds must lie in [0, {MAX_BENCH_SECONDS}], got {seconds}"
+        )))
+    }
+}
+
 fn parse_grid(text: &str) -> Result<(usize, usize), CliError> {
     let bad = || {
         CliError::new(format!(
@@ -121,8 +136,14 @@ fn parse_grid(text: &str) -> Result<(usize, usize), CliError> {
         ))
     };
     let (columns, rows) = text.split_once(['x', 'X']).ok_or_else(bad)?;
-    let columns = columns.trim().parse().map_err(|_| bad())?;
-    let rows = rows.trim().parse().map_err(|_| bad())?;
+    let columns: usize = columns.trim().parse().map_err(|_| bad())?;
+    let rows: usize = rows.trim().parse().map_err(|_| bad())?;
+    // The scene file's limit: beyond it a grid runs out of memory (or time) before it shows anything.
+    if !(2..=MAX_GRID_SIDE).contains(&columns) || !(2..=MAX_GRID_SIDE).contains(&rows) {
+        return Err(CliError::new(format!(
+            "--grid `{text}`: each side must lie in [2, {MAX_GRID_SIDE}] particles"
+        )));
+    }
     Ok((columns, rows))
 }
 
@@ -213,12 +234,7 @@ fn measure(
 }
 
 pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
-    if !(args.seconds.is_finite() && args.seconds >= 0.0) {
-        return Err(CliError::new(format!(
-            "--seconds must be ≥ 0, got {}",
-            args.seconds
-        )));
-    }
+    check_seconds(args.seconds)?;
     let names: Vec<String> = if args.method.is_empty() {
         Method::NAMES.iter().map(|s| s.to_string()).collect()
     } else {
@@ -232,8 +248,21 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                 Method::NAMES.join(", ")
             ))
         })?;
-        if args.substeps == Some(0) || args.iterations == Some(0) {
-            return Err(CliError::new("--substeps and --iterations must be ≥ 1"));
+        if args
+            .substeps
+            .is_some_and(|n| !(1..=MAX_SUBSTEPS).contains(&n))
+        {
+            return Err(CliError::new(format!(
+                "--substeps must lie in [1, {MAX_SUBSTEPS}]"
+            )));
+        }
+        if args
+            .iterations
+            .is_some_and(|n| !(1..=MAX_ITERATIONS).contains(&n))
+        {
+            return Err(CliError::new(format!(
+                "--iterations must lie in [1, {MAX_ITERATIONS}]"
+            )));
         }
         methods.push(with_knobs(method, args.substeps, args.iterations));
     }

@@ -45,10 +45,14 @@ pub struct RenderArgs {
     /// Image format of a sequence (a single --out frame takes its format from the extension).
     #[arg(long, value_enum, default_value_t = ImageFormat::Png, conflicts_with = "out")]
     pub format: ImageFormat,
-    /// Scene time of a single frame, s, in [0, 3600] (the flag is simulated up to it).
-    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
-    pub time: f32,
+    /// Scene time of a single frame, or of a sequence's first frame, s, in [0, 3600] (the flag is
+    /// simulated up to it). Default: 2 for a single frame, 0 for a sequence.
+    #[arg(long, allow_negative_numbers = true)]
+    pub time: Option<f32>,
 }
+
+/// `--time` of a single `sheer render` frame when none is given, s.
+pub const DEFAULT_FRAME_TIME_S: f32 = 2.0;
 
 /// Latest scene time a frame may be rendered at, s: an hour of simulated flag (216 000 frames at
 /// 60 Hz) is already minutes of computing.
@@ -103,7 +107,9 @@ pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
-    check_time(args.time)?;
+    if let Some(time) = args.time {
+        check_time(time)?;
+    }
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
@@ -111,7 +117,7 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
     let mut times = StageTimes::default();
     match (&args.out, &args.out_dir) {
         (Some(out), None) => {
-            advance_to(&mut flag, args.time)?;
+            advance_to(&mut flag, args.time.unwrap_or(DEFAULT_FRAME_TIME_S))?;
             let image = renderer.render(&flag, &mut times)?;
             save_image(&image, out, exposure)?;
             eprintln!("wrote {} ({})", out.display(), renderer.adapter());
@@ -123,6 +129,7 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
             }
             std::fs::create_dir_all(dir)
                 .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
+            advance_to(&mut flag, args.time.unwrap_or(0.0))?;
             let dt = 1.0 / flag.scene.render.fps;
             let progress = crate::progress_bar(u64::from(frames), "rendering");
             for frame in 0..frames {
@@ -308,6 +315,19 @@ pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32, baseline_alpha: f
 
 pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
     check_time(args.time)?;
+    // Checked before the four renders: the figure is an 8-bit labelled image.
+    let is_png = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !is_png {
+        return Err(CliError::new(format!(
+            "--out {}: the figure is a PNG, so the file name must end in .png (linear panels: \
+             --linear-dir)",
+            args.out.display()
+        )));
+    }
     let scene = crate::load_scene(args.scene.as_deref())?;
     let panels = figure2_panels(&scene, args.time)?;
     if let Some(dir) = &args.linear_dir {

@@ -340,17 +340,19 @@ pub const MAX_COORDINATE_M: f32 = 1e4;
 /// Largest flag side, m.
 pub const MAX_FLAG_SIZE_M: f64 = 100.0;
 
-/// toml fills a fixed-size array (and a glam vector) from the first elements of a longer array and
-/// drops the rest without a word: compare every array in the file with the one the scene read.
-fn check_array_lengths(text: &str, scene: &Scene) -> Result<(), CliError> {
+/// What serde does to a scene file without a word, found by comparing the file with the scene read
+/// from it: toml fills a fixed-size array (and a glam vector) from the first elements of a longer array
+/// and drops the rest; and a number read into an `f32` field becomes infinite beyond 3.4·10³⁸, and 0 or
+/// a subnormal (which loses its digits) below 1.2·10⁻³⁸. Both are refused, naming the key.
+fn check_silent_conversions(text: &str, scene: &Scene) -> Result<(), CliError> {
     match (toml::de::DeTable::parse(text), toml::Value::try_from(scene)) {
-        (Ok(file), Ok(toml::Value::Table(read))) => compare_arrays(text, file.get_ref(), &read, ""),
+        (Ok(file), Ok(toml::Value::Table(read))) => compare_tables(text, file.get_ref(), &read, ""),
         // The text parsed already, and a scene always serialises.
         _ => Ok(()),
     }
 }
 
-fn compare_arrays(
+fn compare_tables(
     text: &str,
     file: &toml::de::DeTable,
     read: &toml::Table,
@@ -359,13 +361,23 @@ fn compare_arrays(
     for (key, value) in file {
         let key: &str = key.get_ref();
         let path = format!("{prefix}{key}");
-        match (value.get_ref(), read.get(key)) {
-            (toml::de::DeValue::Table(inner), Some(toml::Value::Table(read))) => {
-                compare_arrays(text, inner, read, &format!("{path}."))?
-            }
-            (toml::de::DeValue::Array(values), Some(toml::Value::Array(read)))
-                if values.len() != read.len() =>
-            {
+        compare_value(text, &path, value, read.get(key))?;
+    }
+    Ok(())
+}
+
+fn compare_value(
+    text: &str,
+    path: &str,
+    value: &toml::Spanned<toml::de::DeValue<'_>>,
+    read: Option<&toml::Value>,
+) -> Result<(), CliError> {
+    match (value.get_ref(), read) {
+        (toml::de::DeValue::Table(inner), Some(toml::Value::Table(read))) => {
+            compare_tables(text, inner, read, &format!("{path}."))
+        }
+        (toml::de::DeValue::Array(values), Some(toml::Value::Array(read))) => {
+            if values.len() != read.len() {
                 return Err(CliError::new(format!(
                     "scene: `{path}` has {} values: it takes {}",
                     values.len(),
@@ -373,10 +385,32 @@ fn compare_arrays(
                 ))
                 .with_span(text, Some(value.span())));
             }
-            _ => {}
+            for (element, read) in values.iter().zip(read) {
+                compare_value(text, path, element, Some(read))?;
+            }
+            Ok(())
         }
+        (toml::de::DeValue::Float(written), Some(toml::Value::Float(read))) => {
+            let Ok(written) = written.as_str().parse::<f64>() else {
+                return Ok(());
+            };
+            // An f64 field reads the value exactly, an f32 field to within its rounding (6·10⁻⁸).
+            let narrowed = written.is_finite()
+                && written != *read
+                && !(read.is_finite()
+                    && read.abs() >= f64::from(f32::MIN_POSITIVE)
+                    && (read - written).abs() <= 1e-7 * written.abs());
+            if narrowed {
+                return Err(CliError::new(format!(
+                    "scene: `{path}` = {written:e} is beyond single precision (it would read as \
+                     {read:e}): give 0 or a magnitude in [1.2e-38, 3.4e38]"
+                ))
+                .with_span(text, Some(value.span())));
+            }
+            Ok(())
+        }
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 /// A position in metres: finite and within [`MAX_COORDINATE_M`] of the origin.
@@ -398,7 +432,7 @@ impl Scene {
         })?;
         scene.base_dir = base_dir.to_path_buf();
         scene.builtin_assets = false;
-        check_array_lengths(text, &scene)?;
+        check_silent_conversions(text, &scene)?;
         scene.validate()?;
         Ok(scene)
     }
@@ -487,7 +521,16 @@ impl Scene {
             f.areal_density,
             "must be finite and > 0 kg/m²",
         )?;
-        finite3("flag.origin", f.origin.as_vec3().to_array())?;
+        // Checked in f64, as the simulator holds it (narrowed first, 1e308 was reported as inf).
+        let origin = f.origin.to_array();
+        check(
+            origin
+                .iter()
+                .all(|c| c.is_finite() && c.abs() <= f64::from(MAX_COORDINATE_M)),
+            "flag.origin",
+            origin,
+            "must be finite and within 10 km of the origin",
+        )?;
         // The model's own checks (cells with no area, …), in its words.
         sheer_cloth::ClothModel::grid(&self.flag)
             .map_err(|e| CliError::new(format!("scene: [flag]: {e}")))?;
@@ -557,11 +600,13 @@ impl Scene {
             l.radius,
             "must lie in (0, 10000] m",
         )?;
+        // The orbit's angle is 2π t / period in f32: a period under a millisecond (a thousand turns a
+        // second, far beyond any frame rate) takes it to infinity within the hour that t may run.
         check(
-            l.period.is_finite(),
+            l.period.is_finite() && (l.period == 0.0 || l.period.abs() >= 1e-3),
             "light.period",
             l.period,
-            "must be finite",
+            "must be 0 (the light stands still) or at least 0.001 s in magnitude",
         )?;
         check(
             l.phase.is_finite(),
@@ -1088,6 +1133,34 @@ mod key_tests {
         for needle in needles {
             assert!(error.contains(needle), "{text}: `{error}` lacks `{needle}`");
         }
+    }
+
+    #[test]
+    fn numbers_that_single_precision_cannot_hold_are_errors_naming_the_key() {
+        // Found by an audit: 1e308 was reported as "got inf", 1e-300 silently became 0 (a still light)
+        // and 1e-44 a subnormal that made the light's position infinite mid-run.
+        for (text, key) in [
+            ("[light]\nperiod = 1e-44", "light.period"),
+            ("[light]\nperiod = -1e-40", "light.period"),
+            ("[light]\nperiod = 1e-300", "light.period"),
+            ("[light]\nradius = 1e308", "light.radius"),
+            ("[light]\ncentre = [0.0, 1e39, 0.0]", "light.centre"),
+            (
+                "[shading]\noptical_thickness = [2.0, 2.0, 1e308]",
+                "shading.optical_thickness",
+            ),
+        ] {
+            assert_refused(text, &[key, "beyond single precision"]);
+        }
+        // An f64 field holds such values exactly, and its own range check speaks.
+        assert_refused(
+            "[flag]\norigin = [1e308, 0.0, 0.0]",
+            &["flag.origin", "1e308"],
+        );
+        // Ordinary values round to f32 and pass; the light's period has its own floor.
+        parse("[light]\nperiod = 0.1\nradius = 1.3").unwrap();
+        parse("[light]\nperiod = 0.0").unwrap();
+        assert_refused("[light]\nperiod = 1e-30", &["light.period", "0.001"]);
     }
 
     #[test]

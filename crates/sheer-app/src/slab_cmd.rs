@@ -66,7 +66,49 @@ pub fn run(args: &SlabArgs) -> Result<(), CliError> {
         }
         None => Box::new(std::io::stdin().lock()),
     };
+    let source = args
+        .input
+        .as_ref()
+        .map_or("standard input".to_string(), |p| p.display().to_string());
+    let input = NamedInput {
+        name: source,
+        inner: input,
+    };
     let stdout = std::io::stdout();
     evaluate_csv_with(input, stdout.lock(), convention, &scattering)
         .map_err(|e| CliError::new(e.to_string()))
+}
+
+/// The CSV input, whose read errors (a directory, bytes that are not UTF-8) name it: the evaluator's
+/// I/O errors cover both its input and standard output, and would not say which.
+struct NamedInput {
+    name: String,
+    inner: Box<dyn BufRead>,
+}
+
+fn reading(name: &str, error: std::io::Error) -> std::io::Error {
+    std::io::Error::new(error.kind(), format!("reading {name}: {error}"))
+}
+
+impl std::io::Read for NamedInput {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.inner.read(buf).map_err(|e| reading(&self.name, e))
+    }
+}
+
+impl BufRead for NamedInput {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.inner.fill_buf().map_err(|e| reading(&self.name, e))
+    }
+
+    fn consume(&mut self, amount: usize) {
+        self.inner.consume(amount)
+    }
+
+    // `lines()` reads through this, and it is here that bytes that are not UTF-8 are found.
+    fn read_line(&mut self, buf: &mut String) -> std::io::Result<usize> {
+        self.inner
+            .read_line(buf)
+            .map_err(|e| reading(&self.name, e))
+    }
 }

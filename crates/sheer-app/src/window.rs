@@ -203,6 +203,8 @@ pub struct SheerApp {
     options: WindowOptions,
     screenshot_requested: bool,
     screenshot_done: Arc<Mutex<Option<Result<PathBuf, String>>>>,
+    /// Scripted mode (`--frames`): the first error, which closes the window and fails [`run`].
+    script_failure: Arc<Mutex<Option<String>>>,
     // Camera orbit about its target: azimuth and elevation (rad) and distance (m).
     orbit: (f32, f32, f32),
 }
@@ -263,6 +265,7 @@ impl SheerApp {
             options,
             screenshot_requested: false,
             screenshot_done: Arc::new(Mutex::new(None)),
+            script_failure: Arc::new(Mutex::new(None)),
             orbit,
         })
     }
@@ -288,6 +291,20 @@ impl SheerApp {
         }
     }
 
+    /// Shows an error in the panel; in scripted mode it also ends the run with that error (a screenshot
+    /// of a failed frame, or none at all, must not exit as a success).
+    fn report_error(&mut self, ctx: &egui::Context, message: String) {
+        if self.options.frames.is_some() {
+            if let Ok(mut failure) = self.script_failure.lock()
+                && failure.is_none()
+            {
+                *failure = Some(message.clone());
+            }
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+        self.notice = Some(message);
+    }
+
     fn advance_and_render(&mut self, ctx: &egui::Context) {
         let dt = 1.0 / self.flag.scene.render.fps;
         let mut times = StageTimes::default();
@@ -295,9 +312,9 @@ impl SheerApp {
             self.step_once = false;
             if let Err(error) = self.flag.advance(dt, &mut times) {
                 // Never show a diverged mesh: back to rest, and say so.
-                self.notice = Some(format!("{error} — the flag was reset"));
+                self.report_error(ctx, format!("{error} — the flag was reset"));
                 if let Err(e) = self.flag.reset() {
-                    self.notice = Some(e.to_string());
+                    self.report_error(ctx, e.to_string());
                 }
             }
         }
@@ -316,7 +333,7 @@ impl SheerApp {
                     }
                 }
             }
-            Err(error) => self.notice = Some(error.to_string()),
+            Err(error) => self.report_error(ctx, error.to_string()),
         }
         self.times = times;
         let now = Instant::now();
@@ -620,7 +637,7 @@ impl eframe::App for SheerApp {
             self.screenshot_requested = false;
             match result {
                 Ok(path) => self.notice = Some(format!("saved {}", path.display())),
-                Err(e) => self.notice = Some(e),
+                Err(e) => self.report_error(&ctx, e),
             }
             if self.options.frames.is_some() {
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);
@@ -674,8 +691,12 @@ impl eframe::App for SheerApp {
 
 /// Opens the window; returns when it closes.
 pub fn run(options: WindowOptions) -> Result<(), CliError> {
+    if let Some(path) = &options.screenshot {
+        check_screenshot_path(path)?;
+    }
     let scene = crate::load_scene(options.scene.as_deref())?;
     let app = SheerApp::new(scene, options)?;
+    let failure = Arc::clone(&app.script_failure);
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size([1000.0, 620.0])
@@ -684,7 +705,37 @@ pub fn run(options: WindowOptions) -> Result<(), CliError> {
         ..Default::default()
     };
     eframe::run_native("sheer", native, Box::new(|_| Ok(Box::new(app))))
-        .map_err(|e| CliError::new(format!("window: {e}")))
+        .map_err(|e| CliError::new(format!("window: {e}")))?;
+    match failure.lock().ok().and_then(|mut f| f.take()) {
+        Some(message) => Err(CliError::new(message)),
+        None => Ok(()),
+    }
+}
+
+/// `--screenshot`: a `.png` in an existing directory, checked before the window opens (the window
+/// writes it only after its frames have run).
+fn check_screenshot_path(path: &std::path::Path) -> Result<(), CliError> {
+    let is_png = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !is_png {
+        return Err(CliError::new(format!(
+            "--screenshot {}: the screenshot is a PNG, so the file name must end in .png",
+            path.display()
+        )));
+    }
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(parent) = parent
+        && !parent.is_dir()
+    {
+        return Err(CliError::new(format!(
+            "--screenshot {}: the directory {} does not exist",
+            path.display(),
+            parent.display()
+        )));
+    }
+    Ok(())
 }
 
 /// Applies the panel's shading edits through `apply` (the renderer's update). On failure the renderer

@@ -7,9 +7,14 @@ use thiserror::Error;
 pub enum ModelError {
     #[error("a grid needs at least 2×2 particles, got {columns}×{rows}")]
     GridTooSmall { columns: usize, rows: usize },
-    #[error("{name} must be finite and > 0, got {value}")]
+    #[error(
+        "a grid of {columns}×{rows} particles is too large: particles are indexed by u32 (at most {} of them)",
+        u32::MAX
+    )]
+    GridTooLarge { columns: usize, rows: usize },
+    #[error("{name} must be finite and > 0, got {value:?}")]
     InvalidDimension { name: &'static str, value: f64 },
-    #[error("areal density must be finite and > 0 kg/m², got {0}")]
+    #[error("areal density must be finite and > 0 kg/m², got {0:?}")]
     InvalidDensity(f64),
     #[error("the mesh has no triangles")]
     EmptyMesh,
@@ -23,7 +28,7 @@ pub enum ModelError {
         index: u32,
         vertex_count: usize,
     },
-    #[error("triangle {triangle} is degenerate at rest (area {area} m²)")]
+    #[error("triangle {triangle} is degenerate at rest (area {area:e} m²)")]
     DegenerateTriangle { triangle: usize, area: f64 },
     #[error("vertex {0} has a non-finite position")]
     NonFinitePosition(usize),
@@ -41,7 +46,7 @@ pub enum ModelError {
     },
     #[error("spring {0} joins a particle to itself or has zero rest length")]
     DegenerateSpring(usize),
-    #[error("particle {index} has an invalid mass {mass} kg (must be finite and > 0)")]
+    #[error("particle {index} has an invalid mass {mass:?} kg (must be finite and > 0)")]
     InvalidMass { index: usize, mass: f64 },
     #[error("this operation needs a grid cloth, but the cloth was built from a mesh")]
     NotAGrid,
@@ -49,7 +54,7 @@ pub enum ModelError {
 
 /// A parameter outside its valid range; `name` is the field path as written in a scene file.
 #[derive(Debug, Clone, PartialEq, Error)]
-#[error("parameter `{name}` = {value}: {reason}")]
+#[error("parameter `{name}` = {value:?}: {reason}")]
 pub struct ParamError {
     pub name: &'static str,
     pub value: f64,

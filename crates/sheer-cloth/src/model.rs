@@ -160,6 +160,13 @@ impl ClothModel {
         if columns < 2 || rows < 2 {
             return Err(ModelError::GridTooSmall { columns, rows });
         }
+        // Springs and triangles store particle indices as u32.
+        if columns
+            .checked_mul(rows)
+            .is_none_or(|particles| particles > u32::MAX as usize)
+        {
+            return Err(ModelError::GridTooLarge { columns, rows });
+        }
         for (name, value) in [("width", width), ("height", height)] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(ModelError::InvalidDimension { name, value });

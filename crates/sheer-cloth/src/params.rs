@@ -209,11 +209,15 @@ impl SpringParams {
     }
 
     /// Checks the family's knobs; the error names the field, `{family}.stiffness` or `{family}.damping`.
+    /// A switched-off family is checked too, for what it keeps until it is switched back on: a
+    /// stiffness of 0 there says "none", a NaN or a negative value is an error.
     fn validate(&self, keys: [&'static str; 2]) -> Result<(), ParamError> {
         if self.enabled {
             positive(keys[0], self.stiffness)?;
-            non_negative(keys[1], self.damping)?;
+        } else {
+            non_negative(keys[0], self.stiffness)?;
         }
+        non_negative(keys[1], self.damping)?;
         Ok(())
     }
 }
@@ -300,6 +304,15 @@ impl Wind {
                 "wind.substeps_per_update",
                 0.0,
                 "must be at least 1",
+            ));
+        }
+        // Held for the whole frame, the forces have no interval to renew at; a value here would be
+        // ignored without a word.
+        if !self.per_substep && self.substeps_per_update != 1 {
+            return Err(ParamError::new(
+                "wind.substeps_per_update",
+                f64::from(self.substeps_per_update),
+                "applies only with wind.per_substep = true (false holds the forces for the whole frame)",
             ));
         }
         Ok(())

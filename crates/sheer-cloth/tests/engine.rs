@@ -299,6 +299,17 @@ fn invalid_models_are_typed_errors() {
             rows: 0
         })
     );
+    // More particles than u32 indices reach (and a count that overflows usize): refused before any
+    // allocation (this panicked with "capacity overflow").
+    for (columns, rows) in [(1 << 16, (1 << 16) + 1), (usize::MAX, 3)] {
+        assert_eq!(
+            grid(&|s| {
+                s.columns = columns;
+                s.rows = rows;
+            }),
+            Some(ModelError::GridTooLarge { columns, rows })
+        );
+    }
     assert!(matches!(
         grid(&|s| s.width = -1.0),
         Some(ModelError::InvalidDimension { name: "width", .. })
@@ -372,6 +383,14 @@ fn invalid_parameters_and_time_steps_are_typed_errors() {
         bad(&|p| p.wind.substeps_per_update = 0),
         "wind.substeps_per_update"
     );
+    // An interval for forces held over the whole frame would be ignored.
+    assert_eq!(
+        bad(&|p| {
+            p.wind.per_substep = false;
+            p.wind.substeps_per_update = 7;
+        }),
+        "wind.substeps_per_update"
+    );
     assert_eq!(bad(&|p| p.shear.stiffness = f64::NAN), "shear.stiffness");
     assert_eq!(bad(&|p| p.bend.damping = -1.0), "bend.damping");
     assert_eq!(bad(&|p| p.stretch.damping = -1.0), "stretch.damping");
@@ -390,7 +409,29 @@ fn invalid_parameters_and_time_steps_are_typed_errors() {
     assert_eq!(bad(&|p| p.gravity.y = f64::INFINITY), "gravity");
     assert_eq!(bad(&|p| p.wind.air_density = -1.0), "wind.air_density");
     assert_eq!(bad(&|p| p.air_damping = f64::NAN), "air_damping");
-    // A switched-off family may carry any stiffness.
+    // A switched-off family is still checked for what it keeps (this accepted NaN and −5): a
+    // stiffness of 0 says "none", NaN and negative values are refused.
+    assert_eq!(
+        bad(&|p| {
+            p.shear.enabled = false;
+            p.shear.stiffness = f64::NAN;
+        }),
+        "shear.stiffness"
+    );
+    assert_eq!(
+        bad(&|p| {
+            p.bend.enabled = false;
+            p.bend.stiffness = -5.0;
+        }),
+        "bend.stiffness"
+    );
+    assert_eq!(
+        bad(&|p| {
+            p.stretch.enabled = false;
+            p.stretch.damping = f64::NAN;
+        }),
+        "stretch.damping"
+    );
     let mut params = SimParams::default();
     params.bend.enabled = false;
     params.bend.stiffness = 0.0;

@@ -50,13 +50,13 @@ use thiserror::Error;
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum SlabParameterError {
     /// τ1 must be finite and strictly positive (a slab of zero thickness is not a slab).
-    #[error("optical thickness tau1 = {0} is not a finite number > 0")]
+    #[error("optical thickness tau1 = {0:?} is not a finite number > 0")]
     OpticalThickness(f64),
     /// Λ = σs/σt must lie in [0, 1].
-    #[error("single-scattering albedo Lambda = {0} is outside [0, 1]")]
+    #[error("single-scattering albedo Lambda = {0:?} is outside [0, 1]")]
     Albedo(f64),
     /// μ and μ0 are cosines of directions on the hemisphere they belong to: (0, 1].
-    #[error("direction cosine {name} = {value} is outside (0, 1]")]
+    #[error("direction cosine {name} = {value:?} is outside (0, 1]")]
     Cosine {
         /// `"mu"` or `"mu0"`.
         name: &'static str,
@@ -64,17 +64,17 @@ pub enum SlabParameterError {
         value: f64,
     },
     /// Irradiance must be finite and non-negative (W/m²).
-    #[error("irradiance {0} W/m^2 is not a finite number >= 0")]
+    #[error("irradiance {0:?} W/m^2 is not a finite number >= 0")]
     Irradiance(f64),
     /// Flux Φ of a point light must be finite and non-negative (W).
-    #[error("light flux {0} W is not a finite number >= 0")]
+    #[error("light flux {0:?} W is not a finite number >= 0")]
     Flux(f64),
     /// Distance from a point light must be finite and strictly positive (m).
-    #[error("distance {0} m to the light is not a finite number > 0")]
+    #[error("distance {0:?} m to the light is not a finite number > 0")]
     Distance(f64),
     /// The `all-orders` model covers only the τ1 range of its precomputed table.
     #[error(
-        "optical thickness tau1 = {value} lies outside the all-orders table's range [{min}, {max}]"
+        "optical thickness tau1 = {value:?} lies outside the all-orders table's range [{min}, {max}]"
     )]
     OutsideTable {
         /// The rejected τ1.
@@ -87,7 +87,7 @@ pub enum SlabParameterError {
     /// The all-orders table's sampler refused a query for another reason (not expected for validated
     /// inputs; reported rather than panicking).
     #[error(
-        "the all-orders table refused tau1 = {tau1}, Lambda = {albedo}, mu0 = {mu0}, mu = {mu}"
+        "the all-orders table refused tau1 = {tau1:?}, Lambda = {albedo:?}, mu0 = {mu0:?}, mu = {mu:?}"
     )]
     TableQuery {
         /// τ1.

@@ -491,6 +491,51 @@ fn background_image_is_composited_pixel_exactly() {
 }
 
 #[test]
+fn a_texture_beyond_the_device_limit_is_a_typed_error_and_keeps_the_last_good_one() {
+    let Some(mut renderer) = renderer(WIDTH, HEIGHT) else {
+        return;
+    };
+    let sheet = Sheet {
+        origin: DVec3::new(-0.5, -0.4, 0.0),
+        u: DVec3::new(1.0, 0.0, 0.0),
+        v: DVec3::new(0.0, 0.8, 0.0),
+        normal: DVec3::Z,
+    };
+    let camera = camera(Vec3::new(0.3, 0.2, 1.8));
+    let background = Background::Uniform([0.2, 0.3, 0.4]);
+    let good = ShadingParams::uniform(0.5, 0.8, Vec3::new(0.2, -0.3, 1.5), 25.0).unwrap();
+    let render = |renderer: &mut HeadlessRenderer, shading: &ShadingParams| {
+        renderer.render(
+            &sheet.mesh(1),
+            &camera,
+            shading,
+            &background,
+            EvaluationPath::PerFragment,
+        )
+    };
+    let before = render(&mut renderer, &good).unwrap();
+    let max = renderer.max_texture_dimension();
+    for texture in ["albedo", "thickness"] {
+        let tall =
+            Texture2d::new(1, max + 1, vec![[0.5, 0.5, 0.5, 1.0]; max as usize + 1]).unwrap();
+        let mut shading = good.clone();
+        match texture {
+            "albedo" => shading.albedo_texture = tall,
+            _ => shading.thickness_texture = Some(tall),
+        }
+        let error = render(&mut renderer, &shading).unwrap_err();
+        assert!(
+            matches!(error, RenderError::TextureTooLarge { texture: t, width: 1, height, max: m }
+                if t == texture && height == max + 1 && m == max),
+            "{error}"
+        );
+        assert!(error.to_string().contains(texture), "{error}");
+    }
+    let after = render(&mut renderer, &good).unwrap();
+    assert_eq!(before.pixels, after.pixels);
+}
+
+#[test]
 fn overlapping_sheets_composite_back_to_front() {
     let Some(mut renderer) = renderer(WIDTH, HEIGHT) else {
         return;

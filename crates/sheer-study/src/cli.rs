@@ -112,11 +112,11 @@ pub fn run(args: &StudyArgs) -> Result<(), StudyError> {
     let result = match &args.command {
         StudyCommand::WorkPrecision(out) => {
             let config = config(out);
-            check_quick_output(out)
+            check_output(out)
                 .and_then(|()| write_work_precision(&config, &out.out, &monitor).map(|_| ()))
         }
         StudyCommand::Stability(out) => {
-            check_quick_output(out).and_then(|()| write_stability(&config(out), &out.out, &monitor))
+            check_output(out).and_then(|()| write_stability(&config(out), &out.out, &monitor))
         }
         StudyCommand::Choose(ChoiceArgs {
             output: out,
@@ -124,7 +124,7 @@ pub fn run(args: &StudyArgs) -> Result<(), StudyError> {
         }) => {
             let config = config(out);
             budget_of(budget, &config).and_then(|budget| {
-                check_quick_output(out)?;
+                check_output(out)?;
                 write_choice(&config, &budget, &out.out, &monitor).map(|_| ())
             })
         }
@@ -134,7 +134,7 @@ pub fn run(args: &StudyArgs) -> Result<(), StudyError> {
         }) => {
             let config = config(out);
             budget_of(budget, &config).and_then(|budget| {
-                check_quick_output(out)?;
+                check_output(out)?;
                 let measured = write_choice(&config, &budget, &out.out, &monitor)?;
                 write_ablation(&config, &measured, &out.out, &monitor)
             })
@@ -145,7 +145,7 @@ pub fn run(args: &StudyArgs) -> Result<(), StudyError> {
         }) => {
             let config = config(out);
             budget_of(budget, &config).and_then(|budget| {
-                check_quick_output(out)?;
+                check_output(out)?;
                 write_all(&config, &budget, &out.out, &monitor)
             })
         }
@@ -162,10 +162,15 @@ fn config(out: &OutputArgs) -> StudyConfig {
     }
 }
 
-/// With `--quick` (and no `--force`), refuses an `--out` folder whose `choice.toml` is not itself from a
-/// quick run: the quick study would overwrite (or, when no setting meets the budget, delete) a full
-/// study's published results.
-fn check_quick_output(out: &OutputArgs) -> Result<(), StudyError> {
+/// Checks the `--out` folder before any work: that it can be created and written (a study takes
+/// minutes, and found out only when it wrote its first file); and, with `--quick` (and no `--force`),
+/// refuses a folder whose `choice.toml` is not itself from a quick run: the quick study would overwrite
+/// (or, when no setting meets the budget, delete) a full study's published results.
+fn check_output(out: &OutputArgs) -> Result<(), StudyError> {
+    std::fs::create_dir_all(&out.out).map_err(|e| io_error(&out.out, e))?;
+    let probe = out.out.join(".sheer-study-write-check");
+    std::fs::write(&probe, b"").map_err(|e| io_error(&out.out, e))?;
+    std::fs::remove_file(&probe).map_err(|e| io_error(&probe, e))?;
     if !out.quick || out.force {
         return Ok(());
     }
@@ -174,15 +179,19 @@ fn check_quick_output(out: &OutputArgs) -> Result<(), StudyError> {
     if text.is_empty() {
         return Ok(());
     }
-    let quick = toml::from_str::<toml::Table>(&text)
-        .ok()
-        .and_then(|table| table.get("quick").and_then(toml::Value::as_bool));
-    if quick == Some(true) {
-        Ok(())
-    } else {
-        Err(StudyError::WouldReplaceFullStudy {
-            path: path.display().to_string(),
-        })
+    let path = path.display().to_string();
+    let table =
+        toml::from_str::<toml::Table>(&text).map_err(|e| StudyError::WouldReplaceUnknownFile {
+            path: path.clone(),
+            reason: format!("it is not TOML: {}", e.message().trim().replace('\n', "; ")),
+        })?;
+    match table.get("quick").and_then(toml::Value::as_bool) {
+        Some(true) => Ok(()),
+        Some(false) => Err(StudyError::WouldReplaceFullStudy { path }),
+        None => Err(StudyError::WouldReplaceUnknownFile {
+            path,
+            reason: "it has no `quick` flag".into(),
+        }),
     }
 }
 

@@ -34,6 +34,11 @@ pub enum StudyError {
          or add --force"
     )]
     WouldReplaceFullStudy { path: String },
+    #[error(
+        "{path} is not a study's choice file ({reason}), and a `--quick` run would replace it; choose \
+         another --out, or add --force"
+    )]
+    WouldReplaceUnknownFile { path: String, reason: String },
     #[error("cannot draw the chart {path}: {message}")]
     Chart { path: String, message: String },
     #[error("cannot read the chart font {path}: {message}")]

@@ -234,6 +234,13 @@ fn read_f64(bytes: &[u8], offset: usize) -> Result<f64> {
 
 const HEADER_BYTES: usize = 8 + 4 * 4 + 2 * 8;
 
+/// The range a stored `ln f` must lie in for [`AllOrdersTable::from_bytes`] to accept it: far wider than
+/// the solver's values (ln f ∈ [−15.6, −1.2] on the shipped table), and narrow enough that `e^{ln f}` is
+/// finite in `f32`.
+pub const LOG_VALUE_MIN: f32 = -80.0;
+/// See [`LOG_VALUE_MIN`].
+pub const LOG_VALUE_MAX: f32 = 10.0;
+
 /// Optical-thickness axis coordinate `c = ln τ1 + τ1`.
 fn tau_coordinate(tau1: f64) -> f64 {
     tau1.ln() + tau1
@@ -410,6 +417,17 @@ impl AllOrdersTable {
         }
         if values.iter().any(|v| !v.is_finite()) {
             return Err(TransportError::TableFormat("non-finite value".into()));
+        }
+        // A finite value can still be no slab's: e^{ln f} of a huge ln f overflows to infinity in the
+        // samplers (f32 `exp` overflows above 88.7). The solver's values on the shipped table span
+        // [−15.6, −1.2], so a value outside [LOG_VALUE_MIN, LOG_VALUE_MAX] means a damaged file.
+        if let Some(v) = values
+            .iter()
+            .find(|v| !(LOG_VALUE_MIN..=LOG_VALUE_MAX).contains(*v))
+        {
+            return Err(TransportError::TableFormat(format!(
+                "value ln f = {v:e} outside [{LOG_VALUE_MIN}, {LOG_VALUE_MAX}]"
+            )));
         }
         Ok(Self::from_parts(spec, values))
     }

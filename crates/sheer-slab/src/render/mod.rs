@@ -167,6 +167,18 @@ pub enum RenderError {
     /// A model parameter the CPU path refused (only for parameters that validation lets through).
     #[error("model: {0}")]
     Model(#[from] SlabParameterError),
+    /// A texture of the shading parameters is larger than this device's textures may be.
+    #[error("the {texture} texture is {width}x{height} texels; the device allows {max} per side")]
+    TextureTooLarge {
+        /// Which texture: `albedo` or `thickness`.
+        texture: &'static str,
+        /// Texture width.
+        width: u32,
+        /// Texture height.
+        height: u32,
+        /// The device's maximum 2-D texture dimension.
+        max: u32,
+    },
     /// The all-orders table does not fit in one texture of this device.
     #[error(
         "the all-orders table needs a {width}x{height} texture; the device allows {max} per side"
@@ -577,6 +589,12 @@ impl HeadlessRenderer {
     /// The linear target's format.
     pub fn target_format(&self) -> TargetFormat {
         self.target_format
+    }
+
+    /// The largest width or height of a texture on this device (the albedo and thickness textures of
+    /// [`ShadingParams`] must fit; [`RenderError::TextureTooLarge`] otherwise).
+    pub fn max_texture_dimension(&self) -> u32 {
+        self.device.limits().max_texture_dimension_2d
     }
 
     /// Whether per-channel τ1 (dual-source blending) is available.
@@ -1068,6 +1086,24 @@ impl HeadlessRenderer {
         shading: &ShadingParams,
         background: &Background,
     ) -> Result<(), RenderError> {
+        // Checked before anything is uploaded, so that a refused texture leaves the last good ones.
+        let max = self.device.limits().max_texture_dimension_2d;
+        let textures = [
+            ("albedo", Some(&shading.albedo_texture)),
+            ("thickness", shading.thickness_texture.as_ref()),
+        ];
+        for (texture, source) in textures {
+            if let Some(source) = source
+                && (source.width() > max || source.height() > max)
+            {
+                return Err(RenderError::TextureTooLarge {
+                    texture,
+                    width: source.width(),
+                    height: source.height(),
+                    max,
+                });
+            }
+        }
         if self.albedo.source.as_ref() != Some(&shading.albedo_texture) {
             self.albedo = Self::upload_texture(
                 &self.device,

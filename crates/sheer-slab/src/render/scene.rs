@@ -287,7 +287,7 @@ pub enum ShadingError {
         texel: usize,
     },
     /// Thickness texels (red channel, multiplying τ1) must be in [2^-14, 65504] (normal half floats).
-    #[error("thickness texel {texel} = {value} is outside [6.1e-5, 65504]")]
+    #[error("thickness texel {texel} = {value:?} is outside [6.1e-5, 65504]")]
     Thickness {
         /// Texel number.
         texel: usize,
@@ -309,7 +309,7 @@ pub enum ShadingError {
     /// With the all-orders model, τ1 (times the thickness texture, as the GPU samples it) must lie in the
     /// table's range.
     #[error(
-        "optical thickness {value} (channel {channel}, times the thickness texture) lies outside the \
+        "optical thickness {value:?} (channel {channel}, times the thickness texture) lies outside the \
          all-orders table's range [{min}, {max}]"
     )]
     OutsideTable {
