@@ -462,5 +462,26 @@ fn slab_refuses_a_bad_model_a_bad_table_and_rows_outside_the_table() {
         1,
         &["row 2", "tau1 = 20", "[0.01, 10]"],
     );
+    // Read errors name the input (they said only "I/O error: Is a directory").
+    let dir_name = dir.to_str().unwrap();
+    one_line(
+        &sheer(&["slab", dir_name]),
+        1,
+        &[&format!("reading {dir_name}")],
+    );
+    let binary = dir.join("binary.csv");
+    std::fs::write(&binary, [0x32, 0x2c, 0xff, 0xfe, 0x0a]).unwrap();
+    one_line(
+        &sheer(&["slab", binary.to_str().unwrap()]),
+        1,
+        &["reading", "binary.csv", "UTF-8"],
+    );
+    // A huge τ1 is echoed in its shortest form.
+    std::fs::write(&input, "1e308,1,0.5,0.5\n").unwrap();
+    one_line(
+        &sheer(&["slab", "--model", "all-orders", path]),
+        1,
+        &["tau1 = 1e308"],
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -19,7 +19,7 @@ pub struct BenchRenderArgs {
     /// Scene file (TOML); default: the shipped default scene.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Minimum measuring time per case, seconds.
+    /// Minimum measuring time per case, seconds, in [0, 3600].
     #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
     pub seconds: f64,
     /// Print CSV instead of a table.

@@ -19,7 +19,8 @@ pub struct BenchSimArgs {
     /// pbd, xpbd, small_steps_xpbd. Default: all.
     #[arg(long, value_delimiter = ',')]
     pub method: Vec<String>,
-    /// Grids as COLUMNSxROWS (comma-separated). Default: 16x11,64x46,256x186,1024x745.
+    /// Grids as COLUMNSxROWS (comma-separated), each side in [2, 1024]. Default:
+    /// 16x11,64x46,256x186,1024x745.
     #[arg(long, value_delimiter = ',')]
     pub grid: Vec<String>,
     /// Sub-steps per frame for every method (default: each method's stable setting on the flag,
@@ -44,7 +45,7 @@ pub struct BenchSimArgs {
     /// or `off` (all three 0 N·s/m, which the position-based solvers skip on a grid).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub spring_damping: Switch,
-    /// Minimum measuring time per case, seconds (at least one frame is always timed).
+    /// Minimum measuring time per case, seconds, in [0, 3600] (at least one frame is always timed).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
     /// Print CSV: method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s
@@ -124,7 +125,7 @@ pub fn check_seconds(seconds: f64) -> Result<(), CliError> {
         Ok(())
     } else {
         Err(CliError::new(format!(
-            "--seconds must lie in [0, {MAX_BENCH_SECONDS}], got {seconds}"
+            "--seconds must lie in [0, {MAX_BENCH_SECONDS}], got {seconds:?}"
         )))
     }
 }

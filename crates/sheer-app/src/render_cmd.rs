@@ -64,7 +64,7 @@ pub fn check_time(time: f32) -> Result<(), CliError> {
         Ok(())
     } else {
         Err(CliError::new(format!(
-            "--time must lie in [0, 3600] s, got {time}"
+            "--time must lie in [0, 3600] s, got {time:?}"
         )))
     }
 }

@@ -600,8 +600,9 @@ impl Scene {
             l.radius,
             "must lie in (0, 10000] m",
         )?;
-        // The orbit's angle is 2π t / period in f32: a period under a millisecond (a thousand turns a
-        // second, far beyond any frame rate) takes it to infinity within the hour that t may run.
+        // The orbit's angle is 2π t / period in f32: below about 1e-34 s it overflows within the hour
+        // that t may run, and under a millisecond (a thousand turns a second, far beyond any frame
+        // rate) the angle's f32 steps are radians wide, so its position is noise.
         check(
             l.period.is_finite() && (l.period == 0.0 || l.period.abs() >= 1e-3),
             "light.period",

@@ -54,7 +54,7 @@ pub enum ModelError {
 
 /// A parameter outside its valid range; `name` is the field path as written in a scene file.
 #[derive(Debug, Clone, PartialEq, Error)]
-#[error("parameter `{name}` = {value:?}: {reason}")]
+#[error("parameter `{name}` = {}: {reason}", shortest(*value))]
 pub struct ParamError {
     pub name: &'static str,
     pub value: f64,
@@ -97,4 +97,14 @@ pub enum StepError {
     InvalidTimeStep(f64),
     #[error("step {step} diverged: {reason}; the last good state was kept")]
     Diverged { step: u64, reason: DivergenceReason },
+}
+
+/// `value` as a person reads it: `7` and `0.25` as written, `1e308` and `1e-300` with an exponent (plain
+/// `Display` writes those with hundreds of digits).
+fn shortest(value: f64) -> String {
+    if value == 0.0 || (1e-4..1e16).contains(&value.abs()) || !value.is_finite() {
+        format!("{value}")
+    } else {
+        format!("{value:e}")
+    }
 }

@@ -269,17 +269,21 @@ fn bad_table_files_are_typed_errors() {
     );
     assert!(error.to_string().contains("infinite.bin"), "{error}");
     // Finite but no slab's: e^{ln f} would overflow to an infinite radiance.
-    bytes[last..].copy_from_slice(&1e30f32.to_le_bytes());
-    std::fs::write(&path, &bytes).unwrap();
-    let error = load_all_orders_table(&path).unwrap_err();
-    assert!(
-        matches!(&error, TableLoadError::Corrupt { reason, .. } if reason.contains("outside")),
-        "{error}"
-    );
-    // The range's ends are admitted.
-    bytes[last..].copy_from_slice(&(-80.0f32).to_le_bytes());
-    std::fs::write(&path, &bytes).unwrap();
-    load_all_orders_table(&path).unwrap();
+    for value in [1e30f32, 10.001] {
+        bytes[last..].copy_from_slice(&value.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+        let error = load_all_orders_table(&path).unwrap_err();
+        assert!(
+            matches!(&error, TableLoadError::Corrupt { reason, .. } if reason.contains("above 10")),
+            "{value}: {error}"
+        );
+    }
+    // The bound itself is admitted, and so is a vanishing term (e^{ln f} = 0, not a wrong value).
+    for value in [10.0f32, -1e30] {
+        bytes[last..].copy_from_slice(&value.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+        load_all_orders_table(&path).unwrap();
+    }
     bytes[8] = 9; // version
     std::fs::write(&path, &bytes).unwrap();
     assert!(matches!(

@@ -168,7 +168,9 @@ fn config(out: &OutputArgs) -> StudyConfig {
 /// (or, when no setting meets the budget, delete) a full study's published results.
 fn check_output(out: &OutputArgs) -> Result<(), StudyError> {
     std::fs::create_dir_all(&out.out).map_err(|e| io_error(&out.out, e))?;
-    let probe = out.out.join(".sheer-study-write-check");
+    let probe = out
+        .out
+        .join(format!(".sheer-study-write-check-{}", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| io_error(&out.out, e))?;
     std::fs::remove_file(&probe).map_err(|e| io_error(&probe, e))?;
     if !out.quick || out.force {
