@@ -241,6 +241,22 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     } else {
         args.method.clone()
     };
+    if args
+        .substeps
+        .is_some_and(|n| !(1..=MAX_SUBSTEPS).contains(&n))
+    {
+        return Err(CliError::new(format!(
+            "--substeps must lie in [1, {MAX_SUBSTEPS}]"
+        )));
+    }
+    if args
+        .iterations
+        .is_some_and(|n| !(1..=MAX_ITERATIONS).contains(&n))
+    {
+        return Err(CliError::new(format!(
+            "--iterations must lie in [1, {MAX_ITERATIONS}]"
+        )));
+    }
     let mut methods = Vec::new();
     for name in &names {
         let method = Method::stable_flag_setting(name).ok_or_else(|| {
@@ -249,22 +265,6 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                 Method::NAMES.join(", ")
             ))
         })?;
-        if args
-            .substeps
-            .is_some_and(|n| !(1..=MAX_SUBSTEPS).contains(&n))
-        {
-            return Err(CliError::new(format!(
-                "--substeps must lie in [1, {MAX_SUBSTEPS}]"
-            )));
-        }
-        if args
-            .iterations
-            .is_some_and(|n| !(1..=MAX_ITERATIONS).contains(&n))
-        {
-            return Err(CliError::new(format!(
-                "--iterations must lie in [1, {MAX_ITERATIONS}]"
-            )));
-        }
         methods.push(with_knobs(method, args.substeps, args.iterations));
     }
     let grids: Vec<(usize, usize)> = if args.grid.is_empty() {

@@ -88,6 +88,13 @@ pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(),
     result.map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))
 }
 
+/// Whether `path` ends in `.png` (any case): the images written only as PNG check it before any work.
+pub fn has_png_extension(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+}
+
 /// Simulates the scene up to `time` seconds at its frame rate.
 pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
     let dt = 1.0 / flag.scene.render.fps;
@@ -316,12 +323,7 @@ pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32, baseline_alpha: f
 pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
     check_time(args.time)?;
     // Checked before the four renders: the figure is an 8-bit labelled image.
-    let is_png = args
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !is_png {
+    if !has_png_extension(&args.out) {
         return Err(CliError::new(format!(
             "--out {}: the figure is a PNG, so the file name must end in .png (linear panels: \
              --linear-dir)",

@@ -715,11 +715,7 @@ pub fn run(options: WindowOptions) -> Result<(), CliError> {
 /// `--screenshot`: a `.png` in an existing directory, checked before the window opens (the window
 /// writes it only after its frames have run).
 fn check_screenshot_path(path: &std::path::Path) -> Result<(), CliError> {
-    let is_png = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !is_png {
+    if !crate::render_cmd::has_png_extension(path) {
         return Err(CliError::new(format!(
             "--screenshot {}: the screenshot is a PNG, so the file name must end in .png",
             path.display()
