@@ -52,7 +52,7 @@ fn times_out_of_range_are_refused_before_any_simulation() {
     let out = scratch("times").join("frame.png");
     let out = out.to_str().unwrap();
     // 1e9 s at 60 Hz was a loop of 4·10⁹ steps; −5 and NaN silently rendered t = 0.
-    for time in ["1e9", "3601", "-1", "-5", "NaN", "inf"] {
+    for time in ["1e9", "3601", "-1", "-5", "NaN", "inf", "1e300"] {
         assert_one_line_error(
             &["render", "--out", out, "--time", time],
             1,
@@ -64,6 +64,12 @@ fn times_out_of_range_are_refused_before_any_simulation() {
             &["--time must lie in [0, 3600] s"],
         );
     }
+    // Past f32's range: echoed as given, not as `inf`.
+    assert_one_line_error(
+        &["render", "--out", out, "--time", "1e300"],
+        1,
+        &["--time must lie in [0, 3600] s, got 1e300"],
+    );
 }
 
 #[test]
@@ -116,6 +122,21 @@ fn benchmark_sizes_beyond_the_scene_limits_are_refused_before_any_work() {
         &sim(&["--grid", "16x11", "--iterations", "10001"]),
         1,
         &["--iterations must lie in [1, 10000]"],
+    );
+    // Silently unused before: small-steps XPBD and the explicit integrators have no iterations.
+    assert_one_line_error(
+        &[
+            "bench",
+            "sim",
+            "--method",
+            "small_steps_xpbd,verlet",
+            "--grid",
+            "16x11",
+            "--iterations",
+            "5",
+        ],
+        1,
+        &["--iterations: none of the methods measured (small_steps_xpbd, verlet)"],
     );
 }
 
@@ -244,6 +265,38 @@ fn images_that_cannot_be_read_are_errors_naming_their_key() {
             );
         }
     }
+}
+
+#[test]
+fn a_black_pixel_in_the_thickness_texture_is_named_by_file_and_place() {
+    // It multiplies τ1: black would be a hole of zero thickness. The message said only "texel 6".
+    let dir = scratch("black-thickness");
+    let mut weave = image::RgbImage::from_pixel(4, 3, image::Rgb([255, 255, 255]));
+    weave.put_pixel(2, 1, image::Rgb([0, 0, 0]));
+    weave.save(dir.join("weave.png")).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[shading]\nalbedo_texture = \"\"\nthickness_texture = \"weave.png\"\n[background]\nimage = \"\"\n",
+    )
+    .unwrap();
+    let out = dir.join("frame.png");
+    assert_one_line_error(
+        &[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        1,
+        &[
+            "shading.thickness_texture",
+            "weave.png",
+            "column 2, row 1",
+            "red 0.0",
+        ],
+    );
 }
 
 #[test]

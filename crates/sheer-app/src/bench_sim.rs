@@ -27,7 +27,8 @@ pub struct BenchSimArgs {
     /// `Method::stable_flag_setting`).
     #[arg(long, allow_negative_numbers = true)]
     pub substeps: Option<u32>,
-    /// Solver iterations per sub-step (PBD, XPBD) or the CG iteration cap (implicit Euler).
+    /// Solver iterations per sub-step (PBD, XPBD) or the CG iteration cap (implicit Euler); the other
+    /// methods have none (refused if no method measured has iterations).
     #[arg(long, allow_negative_numbers = true)]
     pub iterations: Option<u32>,
     /// rayon thread counts to measure (comma-separated). Default: 1 and all cores.
@@ -266,6 +267,20 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
             ))
         })?;
         methods.push(with_knobs(method, args.substeps, args.iterations));
+    }
+    // Applied to those methods that have iterations; a list without any would measure nothing it asks.
+    let has_iterations = |m: &Method| {
+        matches!(
+            m,
+            Method::Pbd { .. } | Method::Xpbd { .. } | Method::ImplicitEuler { .. }
+        )
+    };
+    if args.iterations.is_some() && !methods.iter().any(has_iterations) {
+        return Err(CliError::new(format!(
+            "--iterations: none of the methods measured ({}) has iterations (pbd, xpbd: solver \
+             iterations; implicit_euler: the CG cap)",
+            names.join(", ")
+        )));
     }
     let grids: Vec<(usize, usize)> = if args.grid.is_empty() {
         vec![(16, 11), (64, 46), (256, 186), (1024, 745)]

@@ -250,6 +250,25 @@ fn validate_shading(shading: &ShadingParams, scene: &Scene) -> Result<(), CliErr
              channel {channel} reaches {value}",
             scene.shading.optical_thickness
         )),
+        // Names the file and the pixel, so that the texture can be mended. (An albedo texel cannot
+        // leave [0, 1] from a scene: 8-bit texels times a scale the scene holds to [0, 1].)
+        ShadingError::Thickness { texel, value } => {
+            let path = scene
+                .shading
+                .thickness_texture
+                .as_deref()
+                .unwrap_or_default();
+            let width = shading
+                .thickness_texture
+                .as_ref()
+                .map_or(1, |t| t.width().max(1));
+            let (column, row) = (texel % width as usize, texel / width as usize);
+            CliError::new(format!(
+                "scene: `shading.thickness_texture` = {path:?}: the pixel at column {column}, row \
+                 {row} has red {value:?}, outside [6.1e-5, 65504] (it multiplies τ1, so black is \
+                 not allowed)"
+            ))
+        }
         other => CliError::new(format!("shading: {other}")),
     })
 }

@@ -48,7 +48,7 @@ pub struct RenderArgs {
     /// Scene time of a single frame, or of a sequence's first frame, s, in [0, 3600] (the flag is
     /// simulated up to it). Default: 2 for a single frame, 0 for a sequence.
     #[arg(long, allow_negative_numbers = true)]
-    pub time: Option<f32>,
+    pub time: Option<f64>,
 }
 
 /// `--time` of a single `sheer render` frame when none is given, s.
@@ -58,10 +58,11 @@ pub const DEFAULT_FRAME_TIME_S: f32 = 2.0;
 /// 60 Hz) is already minutes of computing.
 pub const MAX_SCENE_TIME_S: f32 = 3600.0;
 
-/// Checks a `--time` argument: finite and in [0, [`MAX_SCENE_TIME_S`]].
-pub fn check_time(time: f32) -> Result<(), CliError> {
-    if time.is_finite() && (0.0..=MAX_SCENE_TIME_S).contains(&time) {
-        Ok(())
+/// Checks a `--time` argument, finite and in [0, [`MAX_SCENE_TIME_S`]], and returns it as the scene's
+/// f32 seconds. Parsed as f64 so that a value past f32's range is echoed as written, not as `inf`.
+pub fn check_time(time: f64) -> Result<f32, CliError> {
+    if time.is_finite() && (0.0..=f64::from(MAX_SCENE_TIME_S)).contains(&time) {
+        Ok(time as f32)
     } else {
         Err(CliError::new(format!(
             "--time must lie in [0, 3600] s, got {time:?}"
@@ -114,9 +115,7 @@ pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
-    if let Some(time) = args.time {
-        check_time(time)?;
-    }
+    let time = args.time.map(check_time).transpose()?;
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
@@ -124,7 +123,7 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
     let mut times = StageTimes::default();
     match (&args.out, &args.out_dir) {
         (Some(out), None) => {
-            advance_to(&mut flag, args.time.unwrap_or(DEFAULT_FRAME_TIME_S))?;
+            advance_to(&mut flag, time.unwrap_or(DEFAULT_FRAME_TIME_S))?;
             let image = renderer.render(&flag, &mut times)?;
             save_image(&image, out, exposure)?;
             eprintln!("wrote {} ({})", out.display(), renderer.adapter());
@@ -136,7 +135,7 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
             }
             std::fs::create_dir_all(dir)
                 .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
-            advance_to(&mut flag, args.time.unwrap_or(0.0))?;
+            advance_to(&mut flag, time.unwrap_or(0.0))?;
             let dt = 1.0 / flag.scene.render.fps;
             let progress = crate::progress_bar(u64::from(frames), "rendering");
             for frame in 0..frames {
@@ -181,7 +180,7 @@ pub struct Figure2Args {
     pub scene: Option<PathBuf>,
     /// Scene time at which the flag is captured, s, in [0, 3600].
     #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
-    pub time: f32,
+    pub time: f64,
     /// Also write the four panels as linear OpenEXR (RGBA, alpha = transmittance through the flag):
     /// baseline_back.exr, baseline_front.exr, thin_slab_back.exr, thin_slab_front.exr.
     #[arg(long)]
@@ -321,7 +320,7 @@ pub fn figure2_image(panels: &[LinearImage; 4], exposure: f32, baseline_alpha: f
 }
 
 pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
-    check_time(args.time)?;
+    let time = check_time(args.time)?;
     // Checked before the four renders: the figure is an 8-bit labelled image.
     if !has_png_extension(&args.out) {
         return Err(CliError::new(format!(
@@ -331,7 +330,7 @@ pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
         )));
     }
     let scene = crate::load_scene(args.scene.as_deref())?;
-    let panels = figure2_panels(&scene, args.time)?;
+    let panels = figure2_panels(&scene, time)?;
     if let Some(dir) = &args.linear_dir {
         std::fs::create_dir_all(dir)
             .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
@@ -381,9 +380,12 @@ mod label_tests {
         for time in [0.0, 2.0, 3600.0] {
             assert!(check_time(time).is_ok(), "{time}");
         }
-        for time in [-5.0, -0.0001, 3600.5, 1e9, f32::NAN, f32::INFINITY] {
+        for time in [-5.0, -0.0001, 3600.5, 1e9, 1e300, f64::NAN, f64::INFINITY] {
             let error = check_time(time).unwrap_err().to_string();
             assert!(error.contains("--time"), "{error}");
         }
+        // Past f32's range, echoed as written rather than as `inf`.
+        let error = check_time(1e300).unwrap_err().to_string();
+        assert!(error.ends_with("got 1e300"), "{error}");
     }
 }

@@ -618,11 +618,15 @@ impl Scene {
         let c = &self.camera;
         finite3("camera.position", c.position)?;
         finite3("camera.target", c.target)?;
+        // The view direction is their difference, normalised in f32: at coordinates of metres a
+        // millimetre still fixes it to about 1e-4 rad, where 1e-30 m leaves no direction at all.
+        let distance = glam::DVec3::from_array(c.target.map(f64::from))
+            .distance(glam::DVec3::from_array(c.position.map(f64::from)));
         check(
-            c.position != c.target,
+            distance >= 1e-3,
             "camera.target",
             c.target,
-            "must differ from camera.position",
+            "must lie at least 1 mm from camera.position",
         )?;
         // The camera's up is +y: looking along it leaves no direction for "up" in the image (the
         // view matrix degenerates and nothing is drawn). 0.01 rad ≈ 0.6°.
@@ -1531,6 +1535,17 @@ mod key_tests {
                 &["camera.target", "up axis"],
             );
         }
+        // On top of the camera, or so close that the direction is lost in f32: refused for that.
+        for target in [
+            "[0.0, 0.0, 2.0]",
+            "[0.0, 0.0, 2.0000001]",
+            "[1e-30, 0.0, 2.0]",
+        ] {
+            assert_refused(
+                &format!("[camera]\nposition = [0.0, 0.0, 2.0]\ntarget = {target}"),
+                &["camera.target", "at least 1 mm"],
+            );
+        }
         // Steep but not vertical is fine (the window's orbit stops at 80°).
         assert!(parse("[camera]\nposition = [0.0, 5.0, 0.9]\ntarget = [0.0, 0.0, 0.0]").is_ok());
     }
@@ -1611,7 +1626,20 @@ mod key_tests {
             ),
             (
                 "[simulation.method]\nkind = \"rk4\"\nsubsteps = 1",
-                &["rk4", "kind"],
+                &["rk4", "kind", "line 2"],
+            ),
+            // Inside the method's table the line is the key's, not the table header's.
+            (
+                "[simulation.method]\nkind = \"pbd\"\nsubsteps = 4\niterations = -10\nstiffness = 1.0",
+                &["-10", "line 4"],
+            ),
+            (
+                "[simulation.method]\nkind = \"xpbd\"\nsubsteps = 4\niterations = 10\nstiffnes = 1.0",
+                &["stiffnes", "line 5"],
+            ),
+            (
+                "[simulation.method]\nkind = \"verlet\"\nsubsteps = 2.5",
+                &["2.5", "line 3"],
             ),
             // Missing method knobs, and a knob the method does not have.
             (
@@ -1626,7 +1654,11 @@ mod key_tests {
             ("[simulation.method]\nsubsteps = 3", &["kind"]),
             (
                 "[simulation.method]\nkind = \"verlet\"\nsubsteps = 3\niterations = 4",
-                &["iterations"],
+                &["`iterations` is not a knob of verlet", "line 1"],
+            ),
+            (
+                "[simulation.method]\nkind = \"xpbd\"\nsubsteps = 3\niterations = 4\nstiffness = 0.5",
+                &["`stiffness` is not a knob of xpbd (its knobs: substeps, iterations)"],
             ),
             // Duplicate keys and tables.
             ("[light]\nflux = 1.0\nflux = 2.0", &["flux", "line 3"]),

@@ -11,8 +11,13 @@ use crate::error::ParamError;
 
 /// The time integrator, with its own knobs. All methods run behind the same
 /// [`Simulation::step`](crate::Simulation::step); `substeps` splits each `step(dt)` into equal sub-steps.
+///
+/// Serialised as one table, `kind` and the knobs of that kind (`{ kind = "xpbd", substeps = 2,
+/// iterations = 20 }`). It is read through [`MethodTable`], a flat table, so that a deserialiser that
+/// tracks positions (TOML's) can point at the offending key: serde's internally tagged enums buffer the
+/// table first and lose them.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "kind", rename_all = "snake_case", try_from = "MethodTable")]
 pub enum Method {
     /// Forward Euler: `x' = x + h v`, `v' = v + h a(x, v)`. Unconditionally unstable without damping
     /// (its amplification factor is `sqrt(1 + (ωh)²) > 1`); shipped as the baseline that fails.
@@ -43,6 +48,103 @@ pub enum Method {
     Xpbd { substeps: u32, iterations: u32 },
     /// "Small steps" XPBD (Macklin et al. 2019): `substeps` sub-steps of one XPBD iteration each.
     SmallStepsXpbd { substeps: u32 },
+}
+
+/// The kinds of [`Method`], as a table's `kind` names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum MethodKind {
+    ExplicitEuler,
+    SymplecticEuler,
+    Verlet,
+    ImplicitEuler,
+    Pbd,
+    Xpbd,
+    SmallStepsXpbd,
+}
+
+/// A [`Method`] as written: its kind and every knob any kind has. Turned into a method by
+/// `TryFrom`, which asks for exactly the knobs of that kind.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MethodTable {
+    kind: MethodKind,
+    substeps: Option<u32>,
+    iterations: Option<u32>,
+    stiffness: Option<f64>,
+    cg_max_iterations: Option<u32>,
+    cg_tolerance: Option<f64>,
+}
+
+impl TryFrom<MethodTable> for Method {
+    type Error = String;
+
+    fn try_from(table: MethodTable) -> Result<Method, String> {
+        let MethodTable {
+            kind,
+            substeps,
+            iterations,
+            stiffness,
+            cg_max_iterations,
+            cg_tolerance,
+        } = table;
+        let given = [
+            ("substeps", substeps.is_some()),
+            ("iterations", iterations.is_some()),
+            ("stiffness", stiffness.is_some()),
+            ("cg_max_iterations", cg_max_iterations.is_some()),
+            ("cg_tolerance", cg_tolerance.is_some()),
+        ];
+        let (name, knobs): (&str, &[&str]) = match kind {
+            MethodKind::ExplicitEuler => ("explicit_euler", &["substeps"]),
+            MethodKind::SymplecticEuler => ("symplectic_euler", &["substeps"]),
+            MethodKind::Verlet => ("verlet", &["substeps"]),
+            MethodKind::ImplicitEuler => (
+                "implicit_euler",
+                &["substeps", "cg_max_iterations", "cg_tolerance"],
+            ),
+            MethodKind::Pbd => ("pbd", &["substeps", "iterations", "stiffness"]),
+            MethodKind::Xpbd => ("xpbd", &["substeps", "iterations"]),
+            MethodKind::SmallStepsXpbd => ("small_steps_xpbd", &["substeps"]),
+        };
+        for (knob, present) in given {
+            if present && !knobs.contains(&knob) {
+                return Err(format!(
+                    "`{knob}` is not a knob of {name} (its knobs: {})",
+                    knobs.join(", ")
+                ));
+            }
+            if !present && knobs.contains(&knob) {
+                return Err(format!(
+                    "missing `{knob}`: {name} needs {}",
+                    knobs.join(", ")
+                ));
+            }
+        }
+        // Every knob of the kind is present (checked above).
+        let missing = || format!("{name}: a knob is missing");
+        let substeps = substeps.ok_or_else(missing)?;
+        Ok(match kind {
+            MethodKind::ExplicitEuler => Method::ExplicitEuler { substeps },
+            MethodKind::SymplecticEuler => Method::SymplecticEuler { substeps },
+            MethodKind::Verlet => Method::Verlet { substeps },
+            MethodKind::ImplicitEuler => Method::ImplicitEuler {
+                substeps,
+                cg_max_iterations: cg_max_iterations.ok_or_else(missing)?,
+                cg_tolerance: cg_tolerance.ok_or_else(missing)?,
+            },
+            MethodKind::Pbd => Method::Pbd {
+                substeps,
+                iterations: iterations.ok_or_else(missing)?,
+                stiffness: stiffness.ok_or_else(missing)?,
+            },
+            MethodKind::Xpbd => Method::Xpbd {
+                substeps,
+                iterations: iterations.ok_or_else(missing)?,
+            },
+            MethodKind::SmallStepsXpbd => Method::SmallStepsXpbd { substeps },
+        })
+    }
 }
 
 impl Method {

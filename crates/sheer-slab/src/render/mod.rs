@@ -120,6 +120,18 @@ pub enum RenderError {
         /// The backends that were searched.
         backends: String,
     },
+    /// `WGPU_BACKEND` holds a name that is no graphics backend (wgpu itself would skip it with a log
+    /// line and, if nothing is left, search no backend at all).
+    #[error(
+        "WGPU_BACKEND = {value:?}: {name:?} is no graphics backend (use vulkan, gl, metal or dx12, \
+         comma-separated)"
+    )]
+    UnknownBackend {
+        /// The variable's whole value.
+        value: String,
+        /// The first name in it that is not a backend.
+        name: String,
+    },
     /// The adapter refused to create a device.
     #[error("could not create a device on {adapter}: {message}")]
     RequestDevice {
@@ -342,11 +354,30 @@ fn device_rank(device_type: wgpu::DeviceType) -> u8 {
     }
 }
 
+/// The backends to search: those `WGPU_BACKEND` names (every name must be one), else Vulkan and GL.
+fn backends_from_env() -> Result<wgpu::Backends, RenderError> {
+    let Some(value) = std::env::var_os("WGPU_BACKEND") else {
+        return Ok(wgpu::Backends::VULKAN | wgpu::Backends::GL);
+    };
+    let value = value.to_string_lossy().into_owned();
+    let mut backends = wgpu::Backends::empty();
+    for name in value.split(',') {
+        let backend = wgpu::Backends::from_comma_list(name);
+        if backend.is_empty() {
+            return Err(RenderError::UnknownBackend {
+                value: value.clone(),
+                name: name.trim().to_owned(),
+            });
+        }
+        backends |= backend;
+    }
+    Ok(backends)
+}
+
 impl HeadlessRenderer {
     /// Finds an adapter (see the module docs), creates a device and a `width × height` linear target.
     pub fn new(width: u32, height: u32) -> Result<Self, RenderError> {
-        let backends =
-            wgpu::Backends::from_env().unwrap_or(wgpu::Backends::VULKAN | wgpu::Backends::GL);
+        let backends = backends_from_env()?;
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
         descriptor.backends = backends;
         descriptor.flags = wgpu::InstanceFlags::from_build_config().with_env();
