@@ -268,6 +268,25 @@ fn images_that_cannot_be_read_are_errors_naming_their_key() {
 }
 
 #[test]
+fn a_backend_name_that_is_no_backend_is_one_line() {
+    // wgpu skipped the name and searched nothing: "no graphics adapter found for backends
+    // Backends(0x0)".
+    let out = scratch("backend").join("frame.png");
+    let run = Command::new(env!("CARGO_BIN_EXE_sheer"))
+        .args(["render", "--out", out.to_str().unwrap()])
+        .env("WGPU_BACKEND", "garbage")
+        .output()
+        .expect("the sheer binary runs");
+    let stderr = String::from_utf8(run.stderr).unwrap();
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: renderer: WGPU_BACKEND = \"garbage\": \"garbage\" is no"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn a_black_pixel_in_the_thickness_texture_is_named_by_file_and_place() {
     // It multiplies τ1: black would be a hole of zero thickness. The message said only "texel 6".
     let dir = scratch("black-thickness");

@@ -269,13 +269,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         methods.push(with_knobs(method, args.substeps, args.iterations));
     }
     // Applied to those methods that have iterations; a list without any would measure nothing it asks.
-    let has_iterations = |m: &Method| {
-        matches!(
-            m,
-            Method::Pbd { .. } | Method::Xpbd { .. } | Method::ImplicitEuler { .. }
-        )
-    };
-    if args.iterations.is_some() && !methods.iter().any(has_iterations) {
+    if args.iterations.is_some() && !methods.iter().any(Method::has_iterations) {
         return Err(CliError::new(format!(
             "--iterations: none of the methods measured ({}) has iterations (pbd, xpbd: solver \
              iterations; implicit_euler: the CG cap)",

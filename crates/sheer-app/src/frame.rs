@@ -250,8 +250,9 @@ fn validate_shading(shading: &ShadingParams, scene: &Scene) -> Result<(), CliErr
              channel {channel} reaches {value}",
             scene.shading.optical_thickness
         )),
-        // Names the file and the pixel, so that the texture can be mended. (An albedo texel cannot
-        // leave [0, 1] from a scene: 8-bit texels times a scale the scene holds to [0, 1].)
+        // Names the file and the pixel, so that the texture can be mended: from an 8-bit image only a
+        // red of 0 fails. (An albedo texel cannot leave [0, 1] from a scene: 8-bit texels times a
+        // scale the scene holds to [0, 1].)
         ShadingError::Thickness { texel, value } => {
             let path = scene
                 .shading
@@ -265,8 +266,8 @@ fn validate_shading(shading: &ShadingParams, scene: &Scene) -> Result<(), CliErr
             let (column, row) = (texel % width as usize, texel / width as usize);
             CliError::new(format!(
                 "scene: `shading.thickness_texture` = {path:?}: the pixel at column {column}, row \
-                 {row} has red {value:?}, outside [6.1e-5, 65504] (it multiplies τ1, so black is \
-                 not allowed)"
+                 {row} has red {value:?} (linear), outside [6.1e-5, 65504]: only the red channel is \
+                 read, it multiplies τ1, and 0 would be a hole"
             ))
         }
         other => CliError::new(format!("shading: {other}")),

@@ -13,9 +13,9 @@ use crate::error::ParamError;
 /// [`Simulation::step`](crate::Simulation::step); `substeps` splits each `step(dt)` into equal sub-steps.
 ///
 /// Serialised as one table, `kind` and the knobs of that kind (`{ kind = "xpbd", substeps = 2,
-/// iterations = 20 }`). It is read through [`MethodTable`], a flat table, so that a deserialiser that
-/// tracks positions (TOML's) can point at the offending key: serde's internally tagged enums buffer the
-/// table first and lose them.
+/// iterations = 20 }`). It is read through a flat table (the private `MethodTable`), so that a
+/// deserialiser that tracks positions (TOML's) can point at the offending key: serde's internally
+/// tagged enums buffer the table first and lose them.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", try_from = "MethodTable")]
 pub enum Method {
@@ -170,6 +170,15 @@ impl Method {
             } => cg_max_iterations,
             _ => 1,
         }
+    }
+
+    /// Whether the method has an iteration knob: solver iterations (PBD, XPBD) or the CG cap
+    /// (implicit Euler). The others report 1 from [`Method::iterations`].
+    pub fn has_iterations(&self) -> bool {
+        matches!(
+            self,
+            Method::Pbd { .. } | Method::Xpbd { .. } | Method::ImplicitEuler { .. }
+        )
     }
 
     /// Short snake_case name, as used in scene files, CSV output and charts.
@@ -622,7 +631,7 @@ impl SimParams {
 }
 
 #[cfg(test)]
-mod method_table_tests {
+mod method_name_tests {
     use super::*;
 
     #[test]
@@ -639,5 +648,13 @@ mod method_table_tests {
         sorted.sort_unstable();
         sorted.dedup();
         assert_eq!(sorted.len(), Method::all_with_substeps(1, 1).len());
+        // The iteration knob: exactly the methods whose iteration count follows the one asked for.
+        for method in Method::all_with_substeps(1, 7) {
+            assert_eq!(
+                method.has_iterations(),
+                method.iterations() != 1,
+                "{method:?}"
+            );
+        }
     }
 }

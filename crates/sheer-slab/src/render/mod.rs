@@ -18,7 +18,8 @@
 //! (`shaders/multiple_at_vertex.wgsl`) that looks the table up once per mesh vertex for both faces and
 //! feeds the result to the draw as vertex attributes (`vs_multiple_at_vertex`/`fs_multiple_at_vertex`).
 //!
-//! Adapter choice: `WGPU_BACKEND` if set, else Vulkan (Mesa lavapipe on a machine without a GPU) and then
+//! Adapter choice: `WGPU_BACKEND` if set (every name in it must be a backend, else
+//! [`RenderError::UnknownBackend`]), else Vulkan (Mesa lavapipe on a machine without a GPU) and then
 //! GL (llvmpipe over EGL); the first adapter of the preferred backend wins, hardware before software.
 
 mod cpu;
@@ -120,10 +121,10 @@ pub enum RenderError {
         /// The backends that were searched.
         backends: String,
     },
-    /// `WGPU_BACKEND` holds a name that is no graphics backend (wgpu itself would skip it with a log
-    /// line and, if nothing is left, search no backend at all).
+    /// `WGPU_BACKEND` holds a name that is no graphics backend, or none at all (`name` is then empty);
+    /// wgpu itself would skip the name with a log line and, if nothing is left, search no backend.
     #[error(
-        "WGPU_BACKEND = {value:?}: {name:?} is no graphics backend (use vulkan, gl, metal or dx12, \
+        "WGPU_BACKEND = {value:?}: {name:?} is no graphics backend (this build has vulkan and gl, \
          comma-separated)"
     )]
     UnknownBackend {
@@ -354,22 +355,31 @@ fn device_rank(device_type: wgpu::DeviceType) -> u8 {
     }
 }
 
-/// The backends to search: those `WGPU_BACKEND` names (every name must be one), else Vulkan and GL.
+/// The backends to search: those `WGPU_BACKEND` names, else Vulkan and GL.
 fn backends_from_env() -> Result<wgpu::Backends, RenderError> {
-    let Some(value) = std::env::var_os("WGPU_BACKEND") else {
-        return Ok(wgpu::Backends::VULKAN | wgpu::Backends::GL);
+    match std::env::var_os("WGPU_BACKEND") {
+        None => Ok(wgpu::Backends::VULKAN | wgpu::Backends::GL),
+        Some(value) => backends_from_list(&value.to_string_lossy()),
+    }
+}
+
+/// The backends a comma-separated list names, as wgpu reads it (case-insensitive, spaces and empty
+/// names skipped), except that every name must be a backend and at least one must be given.
+fn backends_from_list(value: &str) -> Result<wgpu::Backends, RenderError> {
+    let unknown = |name: &str| RenderError::UnknownBackend {
+        value: value.to_owned(),
+        name: name.to_owned(),
     };
-    let value = value.to_string_lossy().into_owned();
     let mut backends = wgpu::Backends::empty();
-    for name in value.split(',') {
+    for name in value.split(',').map(str::trim).filter(|n| !n.is_empty()) {
         let backend = wgpu::Backends::from_comma_list(name);
         if backend.is_empty() {
-            return Err(RenderError::UnknownBackend {
-                value: value.clone(),
-                name: name.trim().to_owned(),
-            });
+            return Err(unknown(name));
         }
         backends |= backend;
+    }
+    if backends.is_empty() {
+        return Err(unknown(""));
     }
     Ok(backends)
 }
@@ -1644,4 +1654,40 @@ impl std::fmt::Debug for HeadlessRenderer {
 /// Whether GPU tests may be skipped: `SHEER_SKIP_GPU_TESTS=1`. Without it, a missing adapter fails them.
 pub fn gpu_tests_may_be_skipped() -> bool {
     std::env::var("SHEER_SKIP_GPU_TESTS").is_ok_and(|v| v == "1")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backend_lists_read_as_wgpu_reads_them_but_refuse_unknown_names() {
+        let (vulkan, gl) = (wgpu::Backends::VULKAN, wgpu::Backends::GL);
+        for (list, backends) in [
+            ("vulkan", vulkan),
+            ("Vulkan, GL", vulkan | gl),
+            ("vk", vulkan),
+            ("gles", gl),
+            ("opengl,vulkan", vulkan | gl),
+            // A stray comma is skipped, as wgpu skips it.
+            ("vulkan,", vulkan),
+            (" gl , ", gl),
+        ] {
+            assert_eq!(backends_from_list(list).ok(), Some(backends), "{list:?}");
+        }
+        for (list, unknown) in [
+            ("garbage", "garbage"),
+            ("vulkan, vulcan", "vulcan"),
+            ("gl,,dx13", "dx13"),
+            ("", ""),
+            (" , ", ""),
+        ] {
+            match backends_from_list(list) {
+                Err(RenderError::UnknownBackend { value, name }) => {
+                    assert_eq!((value.as_str(), name.as_str()), (list, unknown));
+                }
+                other => panic!("{list:?}: expected UnknownBackend, got {other:?}"),
+            }
+        }
+    }
 }
