@@ -9,7 +9,7 @@
 //!   stretch and bending, the two shear diagonals, all one row (pair) at a time;
 //! - **along** strips join particles within one row: stretch `(2m, 2m + 1)` and bending
 //!   `(4m + j, 4m + j + 2)`, `j ∈ {0, 1}`; with AVX-512 they go eight at a time through explicit
-//!   permutes (`along_avx512.rs`), where the vectoriser would gather and scatter.
+//!   permutes (`strips_avx512.rs`), where the vectoriser would gather and scatter.
 //!
 //! Within a batch no two constraints share a particle, so the order inside it does not matter and the
 //! compiler may vectorise each strip ([`by_cpu!`]); the threads may share the strips with the same
@@ -17,11 +17,13 @@
 //! family. The projection of one constraint is [`project`], which the general path uses as well.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::DVec3;
 
 use crate::model::{GridShape, Spring, SpringKind};
-use crate::parallel::DisjointSlice;
+use crate::parallel::{DisjointSlice, parts};
+use crate::sim::may_exceed_strain;
 use crate::vectorise::by_cpu;
 
 /// How a strip's constraints sit in the particle array.
@@ -236,6 +238,68 @@ impl GridConstraints {
             .collect::<Option<_>>()?;
         Some(grid)
     }
+
+    /// Whether any constraint may be strained beyond `max_strain` at `positions`
+    /// ([`may_exceed_strain`]: conservative, for the divergence check to screen with), strip by strip.
+    pub fn any_near_strain(&self, positions: &[DVec3], max_strain: f64, parallel: bool) -> bool {
+        let found = AtomicBool::new(false);
+        parts(self.strips.len(), parallel, 64, |strips| {
+            let any = self.strips[strips].iter().any(|strip| {
+                let rest = &self.rest_lengths[strip.first..strip.first + strip.count];
+                let [first, second] = strip.particle_ranges();
+                match strip.layout {
+                    Layout::Apart { .. } => {
+                        apart_near_strain(&positions[first], &positions[second], rest, max_strain)
+                    }
+                    Layout::Along { half: 1 } => along_near_strain::<1, 2>(
+                        positions[first].as_chunks().0,
+                        rest.as_chunks().0,
+                        max_strain,
+                    ),
+                    Layout::Along { .. } => along_near_strain::<2, 4>(
+                        positions[first].as_chunks().0,
+                        rest.as_chunks().0,
+                        max_strain,
+                    ),
+                }
+            });
+            if any {
+                found.store(true, Ordering::Relaxed);
+            }
+        });
+        found.into_inner()
+    }
+}
+
+by_cpu! {
+    /// [`may_exceed_strain`] over an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`.
+    fn apart_near_strain(x_a: &[DVec3], x_b: &[DVec3], rest_lengths: &[f64], max_strain: f64) -> bool {
+        let n = x_a.len();
+        let (x_b, rest_lengths) = (&x_b[..n], &rest_lengths[..n]);
+        let mut any = false;
+        for k in 0..n {
+            any |= may_exceed_strain(x_a[k], x_b[k], rest_lengths[k], max_strain);
+        }
+        any
+    }
+}
+
+by_cpu! {
+    /// [`may_exceed_strain`] over an along strip (see [`project_along`] for the layout).
+    fn along_near_strain<const HALF: usize, const CHUNK: usize>(
+        x: &[[DVec3; CHUNK]],
+        rest_lengths: &[[f64; HALF]],
+        max_strain: f64,
+    ) -> bool {
+        let n = x.len().min(rest_lengths.len());
+        let mut any = false;
+        for m in 0..n {
+            for j in 0..HALF {
+                any |= may_exceed_strain(x[m][j], x[m][j + HALF], rest_lengths[m][j], max_strain);
+            }
+        }
+        any
+    }
 }
 
 /// The springs of a grid cloth by their ends `(a, b)`, for the strips to look up. Every spring of a grid
@@ -356,8 +420,12 @@ pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bo
     let correction = if PBD {
         -constraint * inverse_denominator
     } else {
-        let lambda = if MULTIPLIERS { *lambda } else { 0.0 };
-        let elastic = -constraint - family.scaled_compliance * lambda;
+        // Without multipliers λ is 0 and so is its term (α̃ is finite): left out, two operations fewer.
+        let elastic = if MULTIPLIERS {
+            -constraint - family.scaled_compliance * *lambda
+        } else {
+            -constraint
+        };
         if DAMPED {
             let rate = gradient.dot((*x_a - previous_a) - (*x_b - previous_b));
             (elastic - family.gamma * rate) * inverse_denominator
@@ -410,7 +478,7 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
                     previous.slice(second.clone()),
                 )
             };
-            project_apart::<PBD, MULTIPLIERS, DAMPED>(
+            project_apart_strip::<PBD, MULTIPLIERS, DAMPED>(
                 x_a,
                 x_b,
                 previous_a,
@@ -457,8 +525,76 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
     }
 }
 
+/// Projects an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`. With AVX-512 the whole blocks of
+/// eight go through the vectorised loop ([`project_apart`]) and the rest through one masked block
+/// ([`strips_avx512`](crate::strips_avx512)), where the loop would end in a scalar remainder; otherwise
+/// all through the loop. Same bits either way.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
+    x_a: &mut [DVec3],
+    x_b: &mut [DVec3],
+    previous_a: &[DVec3],
+    previous_b: &[DVec3],
+    w_a: &[f64],
+    w_b: &[f64],
+    rest_lengths: &[f64],
+    inverse_denominators: &[f64],
+    lambdas: &mut [f64],
+    family: FamilyConstants,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        use crate::strips_avx512::{BLOCK, project_apart_partial};
+        let whole = x_a.len() / BLOCK * BLOCK;
+        let (x_a, tail_a) = x_a.split_at_mut(whole);
+        let (x_b, tail_b) = x_b.split_at_mut(whole);
+        let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
+        project_apart::<PBD, MULTIPLIERS, DAMPED>(
+            x_a,
+            x_b,
+            &previous_a[..whole],
+            &previous_b[..whole],
+            &w_a[..whole],
+            &w_b[..whole],
+            &rest_lengths[..whole],
+            &inverse_denominators[..whole],
+            lambdas,
+            family,
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe {
+            project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
+                tail_a,
+                tail_b,
+                &previous_a[whole..],
+                &previous_b[whole..],
+                &w_a[whole..],
+                &w_b[whole..],
+                &rest_lengths[whole..],
+                &inverse_denominators[whole..],
+                tail_lambdas,
+                family,
+            )
+        };
+        return;
+    }
+    project_apart::<PBD, MULTIPLIERS, DAMPED>(
+        x_a,
+        x_b,
+        previous_a,
+        previous_b,
+        w_a,
+        w_b,
+        rest_lengths,
+        inverse_denominators,
+        lambdas,
+        family,
+    );
+}
+
 by_cpu! {
-    /// Projects an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`.
+    /// [`project_apart_strip`] in a loop the compiler vectorises: constraint `k` joins `x_a[k]` and
+    /// `x_b[k]`.
     pub(crate) fn project_apart<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
         x_a: &mut [DVec3],
         x_b: &mut [DVec3],
@@ -496,7 +632,7 @@ by_cpu! {
 
 /// Projects an along strip of `HALF` interleaved constraints per chunk of `CHUNK = 2·HALF` particles:
 /// constraint `m·HALF + j` joins `x[m][j]` and `x[m][j + HALF]`. With AVX-512 through
-/// [`along_avx512`](crate::along_avx512), eight constraints at a time; otherwise through the vectorised
+/// [`strips_avx512`](crate::strips_avx512), eight constraints at a time; otherwise through the vectorised
 /// loop. Same bits either way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn project_along<
@@ -518,7 +654,7 @@ pub(crate) fn project_along<
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the CPU has AVX-512F, checked just above.
         unsafe {
-            crate::along_avx512::project::<PBD, MULTIPLIERS, DAMPED, HALF>(
+            crate::strips_avx512::project_along::<PBD, MULTIPLIERS, DAMPED, HALF>(
                 x.as_flattened_mut(),
                 previous.as_flattened(),
                 inverse_masses.as_flattened(),
@@ -880,6 +1016,123 @@ mod tests {
     /// untouched: for PBD and for XPBD with and without multipliers and damping, with switched-off
     /// constraints, constraints exactly at rest length (whose correction is −0, which shows where a
     /// position is −0: only if the negation flips the sign bit, as Rust's does) and a non-finite particle.
+    /// An apart strip of any length, as the solver projects it (whole blocks in the vectorised loop,
+    /// the rest as a masked block with AVX-512), gives the bits of [`project`] one constraint at a time,
+    /// and touches no particle and no multiplier past the strip; with NaN, coincident ends, constraints
+    /// switched off and at rest length, for PBD and XPBD with and without multipliers and damping.
+    #[test]
+    fn apart_strips_of_every_length_match_the_projection_and_touch_nothing_beyond() {
+        let n = 24;
+        let wobble = |i: usize| ((i * 7919) % 13) as f64 * 1e-3;
+        // Run a (particles 0..n) joined to run b (particles n..2n), one row apart.
+        let mut x: Vec<DVec3> = (0..2 * n)
+            .map(|i| {
+                DVec3::new(
+                    0.02 * (i % n) as f64,
+                    -0.02 * (i / n) as f64 + wobble(i),
+                    0.0,
+                )
+            })
+            .collect();
+        x[5].y = f64::NAN;
+        x[n + 9] = x[9]; // coincident ends
+        for k in (0..n).filter(|k| k % 5 == 2) {
+            x[k].z = -0.0;
+            x[n + k].z = -0.0;
+        }
+        let previous: Vec<DVec3> = (0..2 * n)
+            .map(|i| x[i] - DVec3::new(1e-4, 3e-5 * (i % 3) as f64, 1e-5))
+            .collect();
+        let w: Vec<f64> = (0..2 * n).map(|i| 1e4 + i as f64).collect();
+        let rest: Vec<f64> = (0..n)
+            .map(|k| {
+                if k % 5 == 2 {
+                    (x[k] - x[n + k]).length()
+                } else {
+                    0.019
+                }
+            })
+            .collect();
+        let denominators: Vec<f64> = (0..n)
+            .map(|k| if k % 7 == 3 { 0.0 } else { 2e-5 })
+            .collect();
+        let lambdas0: Vec<f64> = (0..n)
+            .map(|k| if k % 5 == 2 { -0.0 } else { 1e-5 * k as f64 })
+            .collect();
+        let family = FamilyConstants {
+            scaled_compliance: 9.0,
+            gamma: 0.3,
+        };
+        let canonical = |v: f64| if v.is_nan() { u64::MAX } else { v.to_bits() };
+        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+            v.iter().map(|p| p.to_array().map(canonical)).collect()
+        };
+        let scalar_bits = |v: &[f64]| -> Vec<u64> { v.iter().map(|&l| canonical(l)).collect() };
+        macro_rules! check {
+            ($pbd:literal, $multipliers:literal, $damped:literal) => {{
+                for count in 0..=19 {
+                    let run = |strip: bool| {
+                        let (mut x, mut lambdas) = (x.clone(), lambdas0.clone());
+                        let (a, b) = x.split_at_mut(n);
+                        if strip {
+                            project_apart_strip::<$pbd, $multipliers, $damped>(
+                                &mut a[..count],
+                                &mut b[..count],
+                                &previous[..count],
+                                &previous[n..n + count],
+                                &w[..count],
+                                &w[n..n + count],
+                                &rest[..count],
+                                &denominators[..count],
+                                &mut lambdas[..count],
+                                family,
+                            );
+                        } else {
+                            for k in 0..count {
+                                project::<$pbd, $multipliers, $damped>(
+                                    &mut a[k],
+                                    &mut b[k],
+                                    previous[k],
+                                    previous[n + k],
+                                    w[k],
+                                    w[n + k],
+                                    rest[k],
+                                    denominators[k],
+                                    &mut lambdas[k],
+                                    family,
+                                );
+                            }
+                        }
+                        (x, lambdas)
+                    };
+                    let (got, expected) = (run(true), run(false));
+                    let case = format!(
+                        "PBD {}, multipliers {}, damped {}, {count} constraints",
+                        $pbd, $multipliers, $damped
+                    );
+                    assert_eq!(bits(&got.0), bits(&expected.0), "{case}");
+                    assert_eq!(scalar_bits(&got.1), scalar_bits(&expected.1), "{case}");
+                    for run in [count..n, n + count..2 * n] {
+                        assert_eq!(bits(&got.0[run.clone()]), bits(&x[run]), "{case}");
+                    }
+                    assert_eq!(
+                        scalar_bits(&got.1[count..]),
+                        scalar_bits(&lambdas0[count..]),
+                        "{case}"
+                    );
+                    if count > 3 {
+                        assert_ne!(bits(&got.0), bits(&x), "{case}: the particles moved");
+                    }
+                }
+            }};
+        }
+        check!(false, true, true);
+        check!(false, true, false);
+        check!(false, false, true);
+        check!(false, false, false);
+        check!(true, false, false);
+    }
+
     #[test]
     fn along_strips_of_every_length_match_the_loop_and_touch_nothing_beyond() {
         let n = 80;

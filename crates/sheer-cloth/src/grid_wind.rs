@@ -53,6 +53,45 @@ pub(crate) fn grid_triangle_forces(
     });
 }
 
+/// The corner shares of the triangles of cell row `row`, from `positions` and `velocities` of particle
+/// rows `row` and `row + 1` only (the slices hold those two rows), into `out` (that row's cells): one
+/// row of [`grid_triangle_forces`], for a caller that shares the rows out itself.
+pub(crate) fn cell_row(
+    columns: usize,
+    wind: &Wind,
+    air_velocity: DVec3,
+    positions: &[DVec3],
+    velocities: &[DVec3],
+    out: &mut [[DVec3; 2]],
+) {
+    cell_rows(
+        columns,
+        wind,
+        air_velocity,
+        positions,
+        velocities,
+        0..1,
+        out,
+    );
+}
+
+/// The cells of row `row - 1` and of row `row` of `shares` (indexed like [`GridShape::triangles`], two
+/// per cell), those that exist: the cells above and below particle row `row`.
+pub(crate) fn cells_around(
+    shape: GridShape,
+    shares: &[DVec3],
+    row: usize,
+) -> [Option<&[[DVec3; 2]]>; 2] {
+    let (cells, _) = shares.as_chunks::<2>();
+    let cells_per_row = shape.columns - 1;
+    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
+    let cell_row = |r: usize| &cells[r * cells_per_row..(r + 1) * cells_per_row];
+    [
+        row.checked_sub(1).map(cell_row),
+        (row + 1 < shape.rows).then(|| cell_row(row)),
+    ]
+}
+
 /// Cells per block of the wind pass: eight `f64` lanes of AVX-512.
 const CELL_BLOCK: usize = 8;
 
@@ -189,32 +228,27 @@ pub(crate) fn add_grid_triangle_forces(
             let particles = r * columns..(r + 1) * columns;
             // SAFETY: the parts of the rows are disjoint.
             let forces = unsafe { forces.slice_mut(particles.clone()) };
-            match body {
-                Some(body) => row_forces(
-                    shape,
-                    Some(shares),
-                    r,
+            let [above, below] = cells_around(shape, shares, r);
+            if let Some(body) = body {
+                body_force_row(
                     &body.masses[particles.clone()],
                     &body.velocities[particles],
                     body.gravity,
                     body.air_damping,
                     forces,
-                ),
-                None => add_row_shares(shape, shares, r, forces),
+                );
             }
+            add_to_particle_row(above, below, forces);
         }
     });
 }
 
-/// The forces on particle row `row` (N) into `forces`: the body force `m (g − c v)` from the row's
-/// `masses` (kg) and `velocities` (m/s), gravity (m/s²) and air damping (1/s), plus, with `shares`, each
-/// particle's triangles' corner shares in ascending triangle order — what [`add_grid_triangle_forces`]
-/// with a body force gives that row.
-#[allow(clippy::too_many_arguments)]
+/// The forces on one particle row (N) into `forces`: the body force `m (g − c v)` from the row's
+/// `masses` (kg) and `velocities` (m/s), gravity (m/s²) and air damping (1/s), plus, with `cells`, the
+/// corner shares of the triangles of the cell rows above and below it ([`cells_around`]) in ascending
+/// triangle order — what [`add_grid_triangle_forces`] with a body force gives that row.
 pub(crate) fn row_forces(
-    shape: GridShape,
-    shares: Option<&[DVec3]>,
-    row: usize,
+    cells: Option<[Option<&[[DVec3; 2]]>; 2]>,
     masses: &[f64],
     velocities: &[DVec3],
     gravity: DVec3,
@@ -222,24 +256,9 @@ pub(crate) fn row_forces(
     forces: &mut [DVec3],
 ) {
     body_force_row(masses, velocities, gravity, air_damping, forces);
-    if let Some(shares) = shares {
-        add_row_shares(shape, shares, row, forces);
+    if let Some([above, below]) = cells {
+        add_to_particle_row(above, below, forces);
     }
-}
-
-/// Adds the corner shares of the triangles around particle row `row` (`shares` indexed like
-/// [`GridShape::triangles`]) to that row's `forces`.
-fn add_row_shares(shape: GridShape, shares: &[DVec3], row: usize, forces: &mut [DVec3]) {
-    let (cells, _) = shares.as_chunks::<2>();
-    let cells_per_row = shape.columns - 1;
-    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
-    // The cells above and below particle row `row`.
-    let above = row
-        .checked_sub(1)
-        .map(|r| &cells[r * cells_per_row..(r + 1) * cells_per_row]);
-    let below =
-        (row + 1 < shape.rows).then(|| &cells[row * cells_per_row..(row + 1) * cells_per_row]);
-    add_to_particle_row(above, below, forces);
 }
 
 by_cpu! {

@@ -22,8 +22,6 @@
 //!
 //! Units: metres, kilograms, seconds, newtons. Results are bit-identical whatever rayon's thread count.
 
-#[cfg(target_arch = "x86_64")]
-mod along_avx512;
 mod error;
 mod grid_constraints;
 mod grid_wind;
@@ -32,8 +30,11 @@ mod model;
 mod nearest;
 mod parallel;
 mod params;
+mod pipeline;
 mod position_based;
 mod sim;
+#[cfg(target_arch = "x86_64")]
+mod strips_avx512;
 mod vectorise;
 mod wavefront;
 pub mod wind;

@@ -307,6 +307,16 @@ fn start_team(threads: usize) -> Option<(Arc<Team>, Vec<JoinHandle<()>>)> {
     Some((team, handles))
 }
 
+/// The number of threads of the team this thread leads, when the team splits its passes into equal
+/// parts ([`Team::run`]): then a pass over `0..threads` gives each thread one index, and all of them run
+/// at once. `None` without a team, or when its passes are claimed chunk by chunk.
+pub(crate) fn team_in_equal_parts() -> Option<usize> {
+    let team = LEADING.get();
+    // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread.
+    let team = unsafe { team.as_ref() }?;
+    (!team.claim.load(Ordering::Relaxed)).then_some(team.threads)
+}
+
 /// Runs `work` on parts of `0..len` that together cover it once: on the team this thread leads (see
 /// [`Team::run`] for how it splits a pass; whatever `grain`, since a team's hand-off costs less than any
 /// pass), else on rayon's pool when `parallel` (parts of `grain` indices), else in one call. Callers must
@@ -352,7 +362,9 @@ where
     });
 }
 
-/// The smallest `i < len` for which `test(i)` holds, if any (the same whatever the split).
+/// The smallest `i < len` for which `test(i)` holds, if any (the same whatever the split); the plain
+/// search that [`first_index_screened`] narrows down.
+#[cfg(test)]
 pub(crate) fn first_index(
     len: usize,
     parallel: bool,
@@ -362,6 +374,36 @@ pub(crate) fn first_index(
     parts(len, parallel, 4096, |range| {
         if let Some(i) = range.into_iter().find(|&i| test(i)) {
             first.fetch_min(i, Ordering::Relaxed);
+        }
+    });
+    Some(first.into_inner()).filter(|&i| i != usize::MAX)
+}
+
+/// Indices per block of [`first_index_screened`].
+const SCREEN_BLOCK: usize = 256;
+
+/// The smallest `i < len` for which `test(i)` holds, as [`first_index`], with `test` run only inside
+/// blocks of indices that `screen` flags. `screen(block)` must hold for every block that contains an
+/// index passing `test`; it is meant to be a loop without early exits, which vectorises where `test`'s
+/// search (which stops at the first hit) does not.
+pub(crate) fn first_index_screened(
+    len: usize,
+    parallel: bool,
+    screen: impl Fn(Range<usize>) -> bool + Sync,
+    test: impl Fn(usize) -> bool + Sync,
+) -> Option<usize> {
+    let first = AtomicUsize::new(usize::MAX);
+    parts(len, parallel, 4096, |range| {
+        let mut start = range.start;
+        while start < range.end {
+            let block = start..(start + SCREEN_BLOCK).min(range.end);
+            start = block.end;
+            if screen(block.clone())
+                && let Some(i) = block.into_iter().find(|&i| test(i))
+            {
+                first.fetch_min(i, Ordering::Relaxed);
+                return;
+            }
         }
     });
     Some(first.into_inner()).filter(|&i| i != usize::MAX)
@@ -546,6 +588,32 @@ mod tests {
         assert_eq!(
             slot.lead(2, true, || first_index(10_000, true, |_| false)),
             None
+        );
+    }
+
+    #[test]
+    fn a_screened_search_finds_what_the_plain_one_finds() {
+        let hits = [96, 97, 255, 256, 5000, 9_999];
+        for len in [0, 1, 255, 256, 257, 10_000] {
+            for &hit in &hits {
+                let test = |i: usize| i == hit || i == 7_777;
+                // The exact screen, and one that flags every block.
+                let screen = |block: Range<usize>| block.into_iter().any(test);
+                let expected = first_index(len, false, test);
+                assert_eq!(first_index_screened(len, false, screen, test), expected);
+                assert_eq!(first_index_screened(len, false, |_| true, test), expected);
+                let mut slot = TeamSlot::default();
+                for claim in [false, true] {
+                    let found =
+                        slot.lead(2, claim, || first_index_screened(len, true, screen, test));
+                    assert_eq!(found, expected, "{len} {hit} {claim}");
+                }
+            }
+        }
+        // A screen that misses a block hides the hit there: the screen decides where to look.
+        assert_eq!(
+            first_index_screened(1000, false, |b| b.start != 0, |i| i == 3 || i == 600),
+            Some(600)
         );
     }
 }

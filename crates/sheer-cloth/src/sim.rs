@@ -14,8 +14,11 @@ use crate::grid_constraints::GridConstraints;
 use crate::grid_wind::{BodyForce, add_grid_triangle_forces, grid_triangle_forces};
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
 use crate::nearest::nearest_points;
-use crate::parallel::{TeamSlot, fill, first_index, sum};
-use crate::params::{Method, SimParams, SpringParams};
+use crate::parallel::{TeamSlot, fill, first_index_screened, sum};
+use crate::params::{Method, SimParams, SpringParams, Wind};
+use crate::pipeline::Progress;
+use crate::position_based::PlanCache;
+use crate::vectorise::by_cpu;
 use crate::wind::{WindField, corner_share_of_triangle_force};
 
 /// Error building a [`Simulation`].
@@ -159,11 +162,25 @@ pub struct Simulation {
     pub(crate) denominator_key: Option<SolverKey>,
     /// Helper threads of the position-based grid solver (empty until a parallel step needs them).
     pub(crate) team: TeamSlot,
+    /// The parts' progress through a pipelined sub-step ([`Pipeline`](crate::pipeline::Pipeline)).
+    pub(crate) progress: Progress,
+    pub(crate) pipeline_plan: PlanCache,
     /// Grids: the constraints in row strips, which the position-based solvers project instead of the
     /// colour batches.
     pub(crate) grid_constraints: Option<GridConstraints>,
     /// How a grid's position-based sub-step orders its batches (tests pick one; the solver picks by size).
     pub(crate) grid_sweep: GridSweep,
+}
+
+/// What the rows of a grid's first pass add to each particle's body force
+/// ([`Simulation::prepare_row_forces`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RowForces {
+    /// The wind's corner shares, in `Simulation::triangle_forces`: the wind acts.
+    pub shares: bool,
+    /// The shares are due to be renewed this sub-step, with these parameters and this air velocity
+    /// (m/s), before the rows read them.
+    pub renew: Option<(Wind, DVec3)>,
 }
 
 /// The order in which a grid's position-based sub-step runs its batches. Every choice gives the same bits.
@@ -180,6 +197,9 @@ pub(crate) enum GridSweep {
     BatchByBatch,
     /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they fit.
     Wavefront { parts: usize },
+    /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
+    /// ([`Pipeline`](crate::pipeline::Pipeline)); it must fit.
+    Pipeline,
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -346,6 +366,8 @@ impl Simulation {
             packed: Vec::new(),
             denominator_key: None,
             team: TeamSlot::default(),
+            progress: Progress::default(),
+            pipeline_plan: PlanCache::default(),
         })
     }
 
@@ -474,64 +496,72 @@ impl Simulation {
         self.params.wind.is_active() && !self.triangles.is_empty()
     }
 
+    /// Whether the triangles' corner shares of the aerodynamic force are due to be renewed at time `time`
+    /// (s): if so, the wind's parameters and the air velocity (m/s) to renew them with, and they count as
+    /// renewed from here on.
+    fn due_wind_renewal(&mut self, time: f64) -> Option<(Wind, DVec3)> {
+        let refresh =
+            self.wind_acts() && (self.wind_stale || self.params.wind.updated_every_substep());
+        refresh.then(|| {
+            self.wind_stale = false;
+            (*self.wind.params(), self.wind.air_velocity(time))
+        })
+    }
+
     /// Renews the triangles' corner shares of the aerodynamic force (N) at time `time` in
     /// `self.triangle_forces` when they are due; whether the wind acts at all.
     fn refresh_wind_shares(&mut self, time: f64) -> bool {
         let wind_active = self.wind_acts();
+        let Some((wind_params, air_velocity)) = self.due_wind_renewal(time) else {
+            return wind_active;
+        };
         let parallel = self.parallel();
         let Simulation {
             positions,
             velocities,
             triangle_forces,
             triangles,
-            params,
-            wind,
-            wind_stale,
             grid_triangulation,
             ..
         } = self;
         let (positions, velocities) = (&positions[..], &velocities[..]);
-        let refresh_wind = wind_active && (*wind_stale || params.wind.updated_every_substep());
-        if refresh_wind {
-            let air_velocity = wind.air_velocity(time);
-            let wind_params = *wind.params();
-            *wind_stale = false;
-            if let Some(shape) = *grid_triangulation {
-                grid_triangle_forces(
-                    shape,
+        if let Some(shape) = *grid_triangulation {
+            grid_triangle_forces(
+                shape,
+                &wind_params,
+                air_velocity,
+                positions,
+                velocities,
+                triangle_forces,
+                parallel,
+            );
+        } else {
+            fill(triangle_forces, parallel, |t| {
+                let corners = triangles[t].map(|i| i as usize);
+                corner_share_of_triangle_force(
                     &wind_params,
+                    corners.map(|i| positions[i]),
+                    corners.map(|i| velocities[i]),
                     air_velocity,
-                    positions,
-                    velocities,
-                    triangle_forces,
-                    parallel,
-                );
-            } else {
-                fill(triangle_forces, parallel, |t| {
-                    let corners = triangles[t].map(|i| i as usize);
-                    corner_share_of_triangle_force(
-                        &wind_params,
-                        corners.map(|i| positions[i]),
-                        corners.map(|i| velocities[i]),
-                        air_velocity,
-                    )
-                });
-            }
+                )
+            });
         }
         wind_active
     }
 
-    /// For the position-based solvers on a grid, which can sum each row's forces in their first pass
-    /// over the rows ([`row_forces`](crate::grid_wind::row_forces)): renews the wind's shares when due
-    /// and says what the rows add to the body force — `Some(true)` the shares, `Some(false)` nothing (no
-    /// wind) — or, when the triangles are not the grid's own, sums the forces into `self.forces`
-    /// ([`compute_forces`](Simulation::compute_forces)) and returns `None`.
-    pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<bool> {
+    /// For the position-based solvers on a grid, which sum each row's forces in their first pass over
+    /// the rows ([`row_forces`](crate::grid_wind::row_forces)): what the rows add to the body force
+    /// ([`RowForces`]), or, when the triangles are not the grid's own, `None` after summing the forces
+    /// into `self.forces` ([`compute_forces`](Simulation::compute_forces)).
+    pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<RowForces> {
         if self.wind_acts() && self.grid_triangulation.is_none() {
             self.compute_forces(time, false);
             return None;
         }
-        Some(self.refresh_wind_shares(time))
+        Some(RowForces {
+            shares: self.wind_acts(),
+            renew: self.due_wind_renewal(time),
+        })
     }
 
     /// Total force on every particle (N) into `self.forces`: springs (if `with_springs`), gravity, air
@@ -633,7 +663,19 @@ impl Simulation {
             let (x, v) = (self.positions[i], self.velocities[i]);
             !x.is_finite() || !v.is_finite() || v.length() > limits.max_speed
         };
-        let particle = first_index(self.positions.len(), parallel, bad_particle);
+        let (positions, velocities) = (&self.positions[..], &self.velocities[..]);
+        let particle = first_index_screened(
+            positions.len(),
+            parallel,
+            |block| {
+                any_unsound_particle(
+                    &positions[block.clone()],
+                    &velocities[block],
+                    limits.max_speed,
+                )
+            },
+            bad_particle,
+        );
         if let Some(particle) = particle {
             let (x, v) = (self.positions[particle], self.velocities[particle]);
             return Some(if !x.is_finite() || !v.is_finite() {
@@ -652,7 +694,23 @@ impl Simulation {
                 - 1.0
         };
         let bad_spring = |s: usize| strain(s) > limits.max_strain;
-        let spring = first_index(self.springs.len(), parallel, bad_spring);
+        let springs = &self.springs[..];
+        // A grid's springs are screened all at once through its strips, whose ends sit at consecutive
+        // particles (the loop vectorises without gathers); only if that flags one are they searched.
+        let grid_screen = self
+            .grid_constraints
+            .as_ref()
+            .map(|grid| grid.any_near_strain(positions, limits.max_strain, parallel));
+        let spring = match grid_screen {
+            Some(false) => None,
+            Some(true) => first_index_screened(springs.len(), parallel, |_| true, bad_spring),
+            None => first_index_screened(
+                springs.len(),
+                parallel,
+                |block| any_spring_near_strain(&springs[block], positions, limits.max_strain),
+                bad_spring,
+            ),
+        };
         spring.map(|spring| DivergenceReason::Strain {
             spring,
             strain: strain(spring),
@@ -928,4 +986,188 @@ pub(crate) fn spring_force_on_a(
     let direction = delta / length;
     let extension_rate = (velocities[b] - velocities[a]).dot(direction);
     (stiffness * (length - spring.rest_length) + damping * extension_rate) * direction
+}
+
+by_cpu! {
+    /// Whether any particle of a block is unsound as [`Simulation::step`]'s divergence check sees it: a
+    /// non-finite position or velocity, or a speed above `max_speed` (m/s). Evaluated for every particle
+    /// without stopping (`|`, not `||`), so that the loop vectorises; the search for the first unsound
+    /// particle then runs only in a block this flags.
+    fn any_unsound_particle(positions: &[DVec3], velocities: &[DVec3], max_speed: f64) -> bool {
+        let n = positions.len();
+        let velocities = &velocities[..n];
+        let finite = |v: DVec3| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
+        let mut any = false;
+        for i in 0..n {
+            let (x, v) = (positions[i], velocities[i]);
+            any |= !finite(x) | !finite(v) | (v.length() > max_speed);
+        }
+        any
+    }
+}
+
+by_cpu! {
+    /// Whether any spring of a block may be strained beyond `max_strain` ([`may_exceed_strain`]), so that
+    /// the exact test (one square root and one division per spring) runs only in blocks this flags.
+    fn any_spring_near_strain(springs: &[Spring], positions: &[DVec3], max_strain: f64) -> bool {
+        let mut any = false;
+        for spring in springs {
+            let (a, b) = (positions[spring.a as usize], positions[spring.b as usize]);
+            any |= may_exceed_strain(a, b, spring.rest_length, max_strain);
+        }
+        any
+    }
+}
+
+/// Whether the spring from `a` to `b` (m) of rest length `rest` (m) may be strained beyond `max_strain`:
+/// its squared length is not clearly below `((1 + max_strain) · rest)²`. Conservative: the divergence
+/// check's strain, `|a − b| / rest − 1` in floating point, exceeds the limit only when the squared length
+/// exceeds the square of the limit length to within a few ulps, far inside the margin of 10⁻⁹; a length
+/// that is not finite is flagged too. No square root and no division, and no branch, so that loops over
+/// it vectorise.
+#[inline(always)]
+pub(crate) fn may_exceed_strain(a: DVec3, b: DVec3, rest: f64, max_strain: f64) -> bool {
+    const MARGIN: f64 = 1.0 - 1e-9;
+    let limit = (1.0 + max_strain) * rest;
+    let clearly_shorter = (a - b).length_squared() < limit * limit * MARGIN;
+    !clearly_shorter
+}
+
+#[cfg(test)]
+mod divergence_tests {
+    use super::*;
+    use crate::model::GridSpec;
+
+    /// The divergence check as it was before the screens: the first unsound particle, else the first
+    /// spring strained beyond the limit, each by a plain search.
+    fn unscreened(sim: &Simulation) -> Option<DivergenceReason> {
+        let limits = sim.params.divergence;
+        let (x, v) = (&sim.positions, &sim.velocities);
+        if let Some(particle) = (0..x.len())
+            .find(|&i| !x[i].is_finite() || !v[i].is_finite() || v[i].length() > limits.max_speed)
+        {
+            return Some(if !x[particle].is_finite() || !v[particle].is_finite() {
+                DivergenceReason::NonFinite { particle }
+            } else {
+                DivergenceReason::Speed {
+                    particle,
+                    speed: v[particle].length(),
+                    limit: limits.max_speed,
+                }
+            });
+        }
+        let strain = |s: &Spring| x[s.a as usize].distance(x[s.b as usize]) / s.rest_length - 1.0;
+        sim.springs
+            .iter()
+            .position(|s| strain(s) > limits.max_strain)
+            .map(|spring| DivergenceReason::Strain {
+                spring,
+                strain: strain(&sim.springs[spring]),
+                limit: limits.max_strain,
+            })
+    }
+
+    /// The screens never miss a spring strained beyond the limit: springs whose length lies within
+    /// a few hundred ulps of the limit length, of rest lengths and limits over many magnitudes, in many
+    /// directions. And they do flag nothing clearly below it.
+    #[test]
+    fn the_strain_screen_flags_every_spring_the_exact_strain_flags() {
+        let mut flagged_exactly = 0;
+        for rest in [1e-4, 0.0175, 0.35, 1.0, 37.0] {
+            for max_strain in [1e-3, 0.5, 10.0, 1e3] {
+                for direction in 0..12 {
+                    let angle = 0.7 * direction as f64;
+                    let unit = DVec3::new(angle.cos(), angle.sin() * 0.6, angle.sin() * 0.8);
+                    let limit_length = (1.0 + max_strain) * rest;
+                    let a = DVec3::new(0.3, -1.7, 0.9);
+                    for k in -300i64..=300 {
+                        let length = limit_length * (1.0 + k as f64 * f64::EPSILON);
+                        let b = a + unit * length;
+                        let exact = a.distance(b) / rest - 1.0 > max_strain;
+                        flagged_exactly += exact as usize;
+                        assert!(
+                            !exact || may_exceed_strain(a, b, rest, max_strain),
+                            "rest {rest}, max strain {max_strain}, {k} ulps"
+                        );
+                    }
+                    let short = a + unit * (0.999 * limit_length);
+                    assert!(!may_exceed_strain(a, short, rest, max_strain));
+                }
+            }
+        }
+        assert!(
+            flagged_exactly > 10_000,
+            "both sides of the limit are covered"
+        );
+        let a = DVec3::ZERO;
+        for b in [DVec3::NAN, DVec3::INFINITY, DVec3::new(1e200, 0.0, 0.0)] {
+            assert!(may_exceed_strain(a, b, 0.0175, 10.0), "{b}");
+        }
+    }
+
+    /// The screened check reports what the plain search reports — which particle or spring, and why —
+    /// on a grid (screened through its strips) and on a general mesh (block by block), for states with
+    /// particles too fast or not finite and springs strained just beyond and just within the limit, on
+    /// one thread and on a team.
+    #[test]
+    fn the_screened_check_reports_what_the_plain_search_reports() {
+        let grid = ClothModel::grid(&GridSpec {
+            columns: 37,
+            rows: 23,
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut mesh = grid.clone();
+        mesh.grid = None; // the same springs, through the general path
+        for model in [grid, mesh] {
+            for parallel in [false, true] {
+                let params = SimParams {
+                    parallel_min_particles: if parallel { 0 } else { usize::MAX },
+                    ..SimParams::default()
+                };
+                let mut sim = Simulation::new(model.clone(), params).unwrap();
+                assert_eq!(sim.grid_constraints.is_some(), model.grid.is_some());
+                let rest = sim.positions.clone();
+                let n = rest.len();
+                let limits = sim.params.divergence;
+                let mut kinds = std::collections::BTreeSet::new();
+                for case in 0..60usize {
+                    let (mut x, mut v) = (rest.clone(), vec![DVec3::ZERO; n]);
+                    // A particle pulled away from its neighbours, so that its springs end near the
+                    // strain limit: beyond it for some cases, within for others.
+                    let i = (case * 97) % n;
+                    let spacing = rest[1].x - rest[0].x;
+                    let stretched = ((1.0 + limits.max_strain).powi(2) - 1.0).sqrt();
+                    let reach = spacing * stretched * (1.0 + (case as f64 - 30.0) * 1e-6);
+                    x[i] += DVec3::new(0.0, 0.0, reach);
+                    match case % 6 {
+                        0 => v[(case * 31) % n] = DVec3::new(0.0, limits.max_speed * 1.001, 0.0),
+                        1 => v[(case * 31) % n] = DVec3::new(0.0, limits.max_speed * 0.999, 0.0),
+                        _ => {}
+                    }
+                    sim.positions.copy_from_slice(&x);
+                    sim.velocities.copy_from_slice(&v);
+                    if case % 10 == 9 {
+                        sim.positions[(case * 13) % n].y = f64::NAN;
+                    }
+                    let expected = unscreened(&sim);
+                    kinds.insert(format!("{expected:?}").chars().take(9).collect::<String>());
+                    let mut team = TeamSlot::default();
+                    let got = if parallel {
+                        team.lead(2, false, || sim.divergence())
+                    } else {
+                        sim.divergence()
+                    };
+                    assert_eq!(
+                        format!("{got:?}"),
+                        format!("{expected:?}"),
+                        "case {case}, grid {}, parallel {parallel}",
+                        model.grid.is_some()
+                    );
+                }
+                // Every outcome is covered: none, a fast particle, a non-finite one, a strained spring.
+                assert_eq!(kinds.len(), 4, "{kinds:?}");
+            }
+        }
+    }
 }

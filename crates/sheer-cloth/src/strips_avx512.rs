@@ -1,4 +1,5 @@
-//! The along-row strips of a grid with AVX-512, eight constraints per vector, without gathers.
+//! A grid's strips with AVX-512, eight constraints per vector, without gathers and without scalar
+//! remainders.
 //!
 //! An along strip pairs particles within one row: stretch joins `2m` and `2m + 1`, bending `4m + j` and
 //! `4m + j + 2`. Left to the vectoriser, the loop over such pairs reads and writes each component of
@@ -11,11 +12,16 @@
 //! by one more permute per component; the results go back the same way. A strip's last, partial block
 //! uses masked loads and stores, which touch nothing past the strip.
 //!
-//! The arithmetic is that of [`project`](crate::grid_constraints::project), operation for operation and
-//! without fused multiply–adds, so the results are the same bits (tested against it and against the
-//! loop in `strip_loops_match_the_one_constraint_projection_bit_for_bit` and
-//! `along_strips_of_every_length_match_the_loop_and_touch_nothing_beyond`; the simulator's fingerprint is
-//! unchanged).
+//! An apart strip's whole blocks vectorise well on their own; its last few constraints (seven of the 63
+//! of every shear strip of the default flag) went through the loop's scalar remainder, and go here as one
+//! masked block instead ([`project_apart_partial`]).
+//!
+//! The arithmetic ([`solve`]) is that of [`project`](crate::grid_constraints::project), operation for
+//! operation and without fused multiply–adds, so the results are the same bits (tested against it and
+//! against the loops in `strip_loops_match_the_one_constraint_projection_bit_for_bit`,
+//! `along_strips_of_every_length_match_the_loop_and_touch_nothing_beyond` and
+//! `apart_strips_of_every_length_match_the_projection_and_touch_nothing_beyond`; the simulator's
+//! fingerprint is unchanged).
 
 use std::arch::x86_64::*;
 
@@ -277,7 +283,7 @@ fn dot(a: [__m512d; 3], b: [__m512d; 3]) -> __m512d {
 /// The CPU must have AVX-512F.
 #[target_feature(enable = "avx512f")]
 #[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn project<
+pub(crate) unsafe fn project_along<
     const PBD: bool,
     const MULTIPLIERS: bool,
     const DAMPED: bool,
@@ -364,10 +370,6 @@ unsafe fn block<
 ) {
     let tables = &TABLES[HALF - 1];
     let (split_a, split_b) = (index(&tables.split_ends.0), index(&tables.split_ends.1));
-    let zero = _mm512_setzero_pd();
-    let one = _mm512_set1_pd(1.0);
-    let scaled_compliance = _mm512_set1_pd(family.scaled_compliance);
-    let gamma = _mm512_set1_pd(family.gamma);
     let particles = 2 * count;
     // SAFETY (the loads and stores below): by the caller's contract, `particles` particles and `count`
     // constraints from the block's first are valid; `DVec3` is three `f64` (`repr(C)`).
@@ -381,68 +383,221 @@ unsafe fn block<
         );
         let w_a = _mm512_permutex2var_pd(w_low, split_a, w_high);
         let w_b = _mm512_permutex2var_pd(w_low, split_b, w_high);
-        let rest = load::<PARTIAL>(rest_lengths.as_ptr().add(first), count, 0);
-        let inverse_denominator =
-            load::<PARTIAL>(inverse_denominators.as_ptr().add(first), count, 0);
-        let lambda_at = lambdas.as_mut_ptr().add(first);
-
-        let delta = [
-            _mm512_sub_pd(ax, bx),
-            _mm512_sub_pd(ay, by),
-            _mm512_sub_pd(az, bz),
-        ];
-        let length = _mm512_sqrt_pd(dot(delta, delta));
-        let inverse_length = _mm512_div_pd(one, length);
-        let gradient = delta.map(|d| _mm512_mul_pd(d, inverse_length));
-        let constraint = _mm512_sub_pd(length, rest);
-        let correction = if PBD {
-            _mm512_mul_pd(negate(constraint), inverse_denominator)
+        let previous_ends = if DAMPED {
+            let previous_at = previous.as_ptr().add(2 * first).cast::<f64>();
+            let [[pax, pbx], [pay, pby], [paz, pbz]] =
+                load_ends::<PARTIAL>(previous_at, particles, tables);
+            [[pax, pay, paz], [pbx, pby, pbz]]
         } else {
-            let lambda = if MULTIPLIERS {
-                load::<PARTIAL>(lambda_at, count, 0)
-            } else {
-                zero
-            };
-            let elastic =
-                _mm512_sub_pd(negate(constraint), _mm512_mul_pd(scaled_compliance, lambda));
-            if DAMPED {
-                let previous_at = previous.as_ptr().add(2 * first).cast::<f64>();
-                let [[pax, pbx], [pay, pby], [paz, pbz]] =
-                    load_ends::<PARTIAL>(previous_at, particles, tables);
-                let moved = [
-                    _mm512_sub_pd(_mm512_sub_pd(ax, pax), _mm512_sub_pd(bx, pbx)),
-                    _mm512_sub_pd(_mm512_sub_pd(ay, pay), _mm512_sub_pd(by, pby)),
-                    _mm512_sub_pd(_mm512_sub_pd(az, paz), _mm512_sub_pd(bz, pbz)),
-                ];
-                let rate = dot(gradient, moved);
-                _mm512_mul_pd(
-                    _mm512_sub_pd(elastic, _mm512_mul_pd(gamma, rate)),
-                    inverse_denominator,
-                )
-            } else {
-                _mm512_mul_pd(elastic, inverse_denominator)
-            }
+            [[_mm512_setzero_pd(); 3]; 2]
         };
-        // `project`'s `active`: `!=` is true for NaN, as the unordered comparison.
-        let active = _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(inverse_denominator, zero)
-            & _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(length, zero);
-        let correction = _mm512_maskz_mov_pd(active, correction);
-        let step = gradient.map(|g| _mm512_maskz_mov_pd(active, _mm512_mul_pd(correction, g)));
-        if MULTIPLIERS {
+        let constraints = Constraints {
+            rest: load::<PARTIAL>(rest_lengths.as_ptr().add(first), count, 0),
+            inverse_denominator: load::<PARTIAL>(
+                inverse_denominators.as_ptr().add(first),
+                count,
+                0,
+            ),
+            lambdas: lambdas.as_mut_ptr().add(first),
+            count,
+        };
+        let [[ax, ay, az], [bx, by, bz]] = solve::<PBD, MULTIPLIERS, DAMPED, PARTIAL>(
+            [[ax, ay, az], [bx, by, bz]],
+            previous_ends,
+            [w_a, w_b],
+            constraints,
+            family,
+        );
+        store_ends::<PARTIAL>(x_at, particles, [[ax, bx], [ay, by], [az, bz]], tables);
+    }
+}
+
+/// A block's per-constraint data: rest lengths and inverted divisors (zero past `count`), and where
+/// its `count` multipliers are.
+struct Constraints {
+    rest: __m512d,
+    inverse_denominator: __m512d,
+    lambdas: *mut f64,
+    count: usize,
+}
+
+/// The arithmetic of [`project`](crate::grid_constraints::project) on eight constraints at once: the
+/// ends `[a, b]` (x, y and z each), their start positions (read only when `DAMPED`) and inverse masses;
+/// returns the ends moved. Operation for operation the scalar function's, without fused multiply–adds.
+///
+/// # Safety
+/// With `MULTIPLIERS`, `constraints.count` multipliers readable and writable at `constraints.lambdas`.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn solve<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+    const PARTIAL: bool,
+>(
+    [a, b]: [[__m512d; 3]; 2],
+    [previous_a, previous_b]: [[__m512d; 3]; 2],
+    [w_a, w_b]: [__m512d; 2],
+    constraints: Constraints,
+    family: FamilyConstants,
+) -> [[__m512d; 3]; 2] {
+    let Constraints {
+        rest,
+        inverse_denominator,
+        lambdas: lambda_at,
+        count,
+    } = constraints;
+    let zero = _mm512_setzero_pd();
+    let one = _mm512_set1_pd(1.0);
+    let scaled_compliance = _mm512_set1_pd(family.scaled_compliance);
+    let gamma = _mm512_set1_pd(family.gamma);
+    let delta: [__m512d; 3] = std::array::from_fn(|c| _mm512_sub_pd(a[c], b[c]));
+    let length = _mm512_sqrt_pd(dot(delta, delta));
+    let inverse_length = _mm512_div_pd(one, length);
+    let gradient = delta.map(|d| _mm512_mul_pd(d, inverse_length));
+    let constraint = _mm512_sub_pd(length, rest);
+    // SAFETY (the multiplier loads and stores): by the caller's contract.
+    let correction = if PBD {
+        _mm512_mul_pd(negate(constraint), inverse_denominator)
+    } else {
+        // As in `project`: without multipliers λ and its term are 0.
+        let elastic = if MULTIPLIERS {
+            let lambda = unsafe { load::<PARTIAL>(lambda_at, count, 0) };
+            _mm512_sub_pd(negate(constraint), _mm512_mul_pd(scaled_compliance, lambda))
+        } else {
+            negate(constraint)
+        };
+        if DAMPED {
+            let moved: [__m512d; 3] = std::array::from_fn(|c| {
+                _mm512_sub_pd(
+                    _mm512_sub_pd(a[c], previous_a[c]),
+                    _mm512_sub_pd(b[c], previous_b[c]),
+                )
+            });
+            let rate = dot(gradient, moved);
+            _mm512_mul_pd(
+                _mm512_sub_pd(elastic, _mm512_mul_pd(gamma, rate)),
+                inverse_denominator,
+            )
+        } else {
+            _mm512_mul_pd(elastic, inverse_denominator)
+        }
+    };
+    // `project`'s `active`: `!=` is true for NaN, as the unordered comparison.
+    let active = _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(inverse_denominator, zero)
+        & _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(length, zero);
+    let correction = _mm512_maskz_mov_pd(active, correction);
+    let step = gradient.map(|g| _mm512_maskz_mov_pd(active, _mm512_mul_pd(correction, g)));
+    if MULTIPLIERS {
+        unsafe {
             let lambda = _mm512_add_pd(load::<PARTIAL>(lambda_at, count, 0), correction);
             store::<PARTIAL>(lambda_at, count, 0, lambda);
         }
-        let moved_a = |p: __m512d, s: __m512d| _mm512_add_pd(p, _mm512_mul_pd(w_a, s));
-        let moved_b = |p: __m512d, s: __m512d| _mm512_sub_pd(p, _mm512_mul_pd(w_b, s));
-        store_ends::<PARTIAL>(
-            x_at,
-            particles,
+    }
+    [
+        std::array::from_fn(|c| _mm512_add_pd(a[c], _mm512_mul_pd(w_a, step[c]))),
+        std::array::from_fn(|c| _mm512_sub_pd(b[c], _mm512_mul_pd(w_b, step[c]))),
+    ]
+}
+
+/// x, y and z of the first `particles` (at most 8) of the 8 consecutive particles at `p`; lanes past
+/// them are zero.
+///
+/// # Safety
+/// `3 · particles` `f64` readable at `p`.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn load_run<const PARTIAL: bool>(p: *const f64, particles: usize) -> [__m512d; 3] {
+    // SAFETY: `load` reads only the first `3 · particles` `f64`.
+    let r: [__m512d; 3] = std::array::from_fn(|k| unsafe { load::<PARTIAL>(p, 3 * particles, k) });
+    std::array::from_fn(|c| {
+        let (first, second) = (index(&SPLIT[c].0), index(&SPLIT[c].1));
+        _mm512_permutex2var_pd(_mm512_permutex2var_pd(r[0], first, r[1]), second, r[2])
+    })
+}
+
+/// Writes what [`load_run`] read back to the first `particles` particles at `p`.
+///
+/// # Safety
+/// `3 · particles` `f64` writable at `p`.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn store_run<const PARTIAL: bool>(p: *mut f64, particles: usize, [x, y, z]: [__m512d; 3]) {
+    for (v, merge) in MERGE.iter().enumerate() {
+        let xy = _mm512_permutex2var_pd(x, index(&merge.0), y);
+        let xyz = _mm512_permutex2var_pd(xy, index(&merge.1), z);
+        // SAFETY: `store` writes only the first `3 · particles` `f64`.
+        unsafe { store::<PARTIAL>(p, 3 * particles, v, xyz) };
+    }
+}
+
+/// Projects an apart strip of fewer than eight constraints (constraint `k` joins `x_a[k]` and `x_b[k]`;
+/// the slices are those of `grid_constraints::project_apart`) as one masked block, which touches nothing
+/// past the strip: the tail of a strip whose whole blocks the vectorised loop takes. That loop's scalar
+/// remainder cost a fifth of the apart strips' time on the default flag, whose shear strips have 63
+/// constraints (`perf annotate` of `fingerprint time 64x46 1 1500`).
+///
+/// # Safety
+/// The CPU must have AVX-512F.
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn project_apart_partial<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+>(
+    x_a: &mut [DVec3],
+    x_b: &mut [DVec3],
+    previous_a: &[DVec3],
+    previous_b: &[DVec3],
+    inverse_mass_a: &[f64],
+    inverse_mass_b: &[f64],
+    rest_lengths: &[f64],
+    inverse_denominators: &[f64],
+    lambdas: &mut [f64],
+    family: FamilyConstants,
+) {
+    let n = x_a.len();
+    assert!(
+        x_b.len() == n
+            && previous_a.len() == n
+            && previous_b.len() == n
+            && inverse_mass_a.len() == n
+            && inverse_mass_b.len() == n
+    );
+    assert!(rest_lengths.len() == n && inverse_denominators.len() == n && lambdas.len() == n);
+    assert!(n < BLOCK, "{n} constraints are more than one block");
+    if n == 0 {
+        return;
+    }
+    // SAFETY (the loads and stores): the asserts above make `n` particles and constraints valid in
+    // every slice; `DVec3` is three `f64` (`repr(C)`).
+    unsafe {
+        let a_at = x_a.as_mut_ptr().cast::<f64>();
+        let b_at = x_b.as_mut_ptr().cast::<f64>();
+        let a = load_run::<true>(a_at, n);
+        let b = load_run::<true>(b_at, n);
+        let previous = if DAMPED {
             [
-                [moved_a(ax, step[0]), moved_b(bx, step[0])],
-                [moved_a(ay, step[1]), moved_b(by, step[1])],
-                [moved_a(az, step[2]), moved_b(bz, step[2])],
-            ],
-            tables,
-        );
+                load_run::<true>(previous_a.as_ptr().cast(), n),
+                load_run::<true>(previous_b.as_ptr().cast(), n),
+            ]
+        } else {
+            [[_mm512_setzero_pd(); 3]; 2]
+        };
+        let w = [
+            load::<true>(inverse_mass_a.as_ptr(), n, 0),
+            load::<true>(inverse_mass_b.as_ptr(), n, 0),
+        ];
+        let constraints = Constraints {
+            rest: load::<true>(rest_lengths.as_ptr(), n, 0),
+            inverse_denominator: load::<true>(inverse_denominators.as_ptr(), n, 0),
+            lambdas: lambdas.as_mut_ptr(),
+            count: n,
+        };
+        let [a, b] =
+            solve::<PBD, MULTIPLIERS, DAMPED, true>([a, b], previous, w, constraints, family);
+        store_run::<true>(a_at, n, a);
+        store_run::<true>(b_at, n, b);
     }
 }

@@ -9,23 +9,23 @@
 /// Defines `fn $name(args)` whose body is compiled per instruction set and chosen at run time.
 macro_rules! by_cpu {
     ($(#[$meta:meta])* $vis:vis fn $name:ident $(<$(const $g:ident: $gt:ty),* $(,)?>)?
-        ($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
+        ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$meta])*
         #[allow(clippy::too_many_arguments)]
-        $vis fn $name $(<$(const $g: $gt),*>)? ($($arg: $ty),*) {
+        $vis fn $name $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $(-> $ret)? {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
-            fn body $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $body
+            fn body $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $(-> $ret)? $body
             #[cfg(target_arch = "x86_64")]
             {
                 #[target_feature(enable = "avx512f")]
                 #[allow(clippy::too_many_arguments)]
-                fn avx512 $(<$(const $g: $gt),*>)? ($($arg: $ty),*) {
+                fn avx512 $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $(-> $ret)? {
                     body $(::<$($g),*>)? ($($arg),*)
                 }
                 #[target_feature(enable = "avx2")]
                 #[allow(clippy::too_many_arguments)]
-                fn avx2 $(<$(const $g: $gt),*>)? ($($arg: $ty),*) {
+                fn avx2 $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $(-> $ret)? {
                     body $(::<$($g),*>)? ($($arg),*)
                 }
                 if std::arch::is_x86_feature_detected!("avx512f") {
