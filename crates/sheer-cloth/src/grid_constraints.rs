@@ -1016,6 +1016,54 @@ mod tests {
     /// untouched: for PBD and for XPBD with and without multipliers and damping, with switched-off
     /// constraints, constraints exactly at rest length (whose correction is −0, which shows where a
     /// position is −0: only if the negation flips the sign bit, as Rust's does) and a non-finite particle.
+    /// The family constants of the strip tests: XPBD with damping.
+    const STRIP_TEST_FAMILY: FamilyConstants = FamilyConstants {
+        scaled_compliance: 9.0,
+        gamma: 0.3,
+    };
+
+    /// Bits, with every NaN as one: Rust leaves a NaN's sign and payload open, and the vectoriser may
+    /// commute the operands that pass one on (a diverged state is rolled back anyway).
+    fn nan_blind(v: f64) -> u64 {
+        if v.is_nan() { u64::MAX } else { v.to_bits() }
+    }
+
+    fn nan_blind_scalar_bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|&l| nan_blind(l)).collect()
+    }
+
+    fn nan_blind_bits(v: &[DVec3]) -> Vec<[u64; 3]> {
+        v.iter().map(|p| p.to_array().map(nan_blind)).collect()
+    }
+
+    /// Data for `count` constraints with ends `ends(k)` among `x`: rest lengths, inverted divisors and
+    /// multipliers; every fifth constraint exactly at its rest length with a multiplier of −0, every
+    /// seventh switched off.
+    #[allow(clippy::type_complexity)]
+    fn constraint_data(
+        x: &[DVec3],
+        count: usize,
+        ends: &dyn Fn(usize) -> (usize, usize),
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let rest = (0..count)
+            .map(|k| {
+                let (a, b) = ends(k);
+                if k % 5 == 2 {
+                    (x[a] - x[b]).length()
+                } else {
+                    0.019
+                }
+            })
+            .collect();
+        let denominators = (0..count)
+            .map(|k| if k % 7 == 3 { 0.0 } else { 2e-5 })
+            .collect();
+        let lambdas = (0..count)
+            .map(|k| if k % 5 == 2 { -0.0 } else { 1e-5 * k as f64 })
+            .collect();
+        (rest, denominators, lambdas)
+    }
+
     /// An apart strip of any length, as the solver projects it (whole blocks in the vectorised loop,
     /// the rest as a masked block with AVX-512), gives the bits of [`project`] one constraint at a time,
     /// and touches no particle and no multiplier past the strip; with NaN, coincident ends, constraints
@@ -1044,30 +1092,9 @@ mod tests {
             .map(|i| x[i] - DVec3::new(1e-4, 3e-5 * (i % 3) as f64, 1e-5))
             .collect();
         let w: Vec<f64> = (0..2 * n).map(|i| 1e4 + i as f64).collect();
-        let rest: Vec<f64> = (0..n)
-            .map(|k| {
-                if k % 5 == 2 {
-                    (x[k] - x[n + k]).length()
-                } else {
-                    0.019
-                }
-            })
-            .collect();
-        let denominators: Vec<f64> = (0..n)
-            .map(|k| if k % 7 == 3 { 0.0 } else { 2e-5 })
-            .collect();
-        let lambdas0: Vec<f64> = (0..n)
-            .map(|k| if k % 5 == 2 { -0.0 } else { 1e-5 * k as f64 })
-            .collect();
-        let family = FamilyConstants {
-            scaled_compliance: 9.0,
-            gamma: 0.3,
-        };
-        let canonical = |v: f64| if v.is_nan() { u64::MAX } else { v.to_bits() };
-        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
-            v.iter().map(|p| p.to_array().map(canonical)).collect()
-        };
-        let scalar_bits = |v: &[f64]| -> Vec<u64> { v.iter().map(|&l| canonical(l)).collect() };
+        let (rest, denominators, lambdas0) = constraint_data(&x, n, &|k| (k, n + k));
+        let family = STRIP_TEST_FAMILY;
+        let (bits, scalar_bits) = (nan_blind_bits, nan_blind_scalar_bits);
         macro_rules! check {
             ($pbd:literal, $multipliers:literal, $damped:literal) => {{
                 for count in 0..=19 {
@@ -1150,39 +1177,8 @@ mod tests {
             })
             .collect();
         let w: Vec<f64> = (0..n).map(|i| 1e4 + i as f64).collect();
-        let family = FamilyConstants {
-            scaled_compliance: 9.0,
-            gamma: 0.3,
-        };
-        // Bits, with every NaN as one: Rust leaves a NaN's sign and payload open, and the vectoriser
-        // may commute the operands that pass one on (a diverged state is rolled back anyway).
-        let canonical = |v: f64| if v.is_nan() { u64::MAX } else { v.to_bits() };
-        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
-            v.iter().map(|p| p.to_array().map(canonical)).collect()
-        };
-        let scalar_bits = |v: &[f64]| -> Vec<u64> { v.iter().map(|&l| canonical(l)).collect() };
-        // Constraint data for ends `ends(k)`: every fifth constraint exactly at its rest length with a
-        // multiplier of −0, every seventh switched off.
-        let constraint_data = |x: &[DVec3], ends: &dyn Fn(usize) -> (usize, usize)| {
-            let count = n / 2;
-            let rest: Vec<f64> = (0..count)
-                .map(|k| {
-                    let (a, b) = ends(k);
-                    if k % 5 == 2 {
-                        (x[a] - x[b]).length()
-                    } else {
-                        0.019
-                    }
-                })
-                .collect();
-            let denominators: Vec<f64> = (0..count)
-                .map(|k| if k % 7 == 3 { 0.0 } else { 2e-5 })
-                .collect();
-            let lambdas: Vec<f64> = (0..count)
-                .map(|k| if k % 5 == 2 { -0.0 } else { 1e-5 * k as f64 })
-                .collect();
-            (rest, denominators, lambdas)
-        };
+        let family = STRIP_TEST_FAMILY;
+        let (bits, scalar_bits) = (nan_blind_bits, nan_blind_scalar_bits);
         macro_rules! check {
             ($pbd:literal, $multipliers:literal, $damped:literal, $half:literal, $chunk:literal) => {{
                 let half: usize = $half;
@@ -1198,7 +1194,7 @@ mod tests {
                     x[a].z = -0.0;
                     x[b].z = -0.0;
                 }
-                let (rest, denominators, lambdas0) = constraint_data(&x, &ends);
+                let (rest, denominators, lambdas0) = constraint_data(&x, n / 2, &ends);
                 for chunks in 0..=19 {
                     let run = |looped: bool| {
                         let (mut x, mut lambdas) = (x.clone(), lambdas0.clone());

@@ -1032,6 +1032,27 @@ mod tests {
         (bits(sim.positions()), bits(sim.velocities()))
     }
 
+    /// The bits of `sim` after `frames` frames on a pool of `threads` threads, its pole turning a little
+    /// further every frame.
+    fn turning_pole_bits(
+        mut sim: Simulation,
+        threads: usize,
+        frames: usize,
+    ) -> (Vec<[u64; 3]>, Vec<[u64; 3]>) {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            for frame in 0..frames {
+                let turn = glam::DAffine3::from_rotation_y(0.01 * frame as f64);
+                sim.move_pins(turn).unwrap();
+                sim.step(1.0 / 60.0).unwrap();
+            }
+        });
+        state_bits(&sim)
+    }
+
     /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
     /// the batches along rows, the attachments and the velocities in another) give the bits of the same
     /// work done pass by pass: batch by batch, and the forces summed beforehand by the general path.
@@ -1115,18 +1136,7 @@ mod tests {
             let run = |sweep: GridSweep, threads: usize| {
                 let mut sim = windy_flag(9, rows, 3.0, method, threads > 1);
                 sim.grid_sweep = sweep;
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                pool.install(|| {
-                    for frame in 0..12 {
-                        let turn = glam::DAffine3::from_rotation_y(0.01 * frame as f64);
-                        sim.move_pins(turn).unwrap();
-                        sim.step(1.0 / 60.0).unwrap();
-                    }
-                });
-                state_bits(&sim)
+                turning_pole_bits(sim, threads, 12)
             };
             let passes = run(GridSweep::Passes, 1);
             for parts in part_counts {
@@ -1175,18 +1185,7 @@ mod tests {
                     sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
                     sim.params.wind.substeps_per_update = interval;
                     sim.grid_sweep = sweep;
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(threads)
-                        .build()
-                        .unwrap();
-                    pool.install(|| {
-                        for frame in 0..15 {
-                            let turn = glam::DAffine3::from_rotation_y(0.01 * frame as f64);
-                            sim.move_pins(turn).unwrap();
-                            sim.step(1.0 / 60.0).unwrap();
-                        }
-                    });
-                    state_bits(&sim)
+                    turning_pole_bits(sim, threads, 15)
                 };
                 let passes = run(GridSweep::Passes, 1);
                 for threads in [2, 3, 4] {
