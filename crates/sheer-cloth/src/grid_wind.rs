@@ -75,20 +75,17 @@ pub(crate) fn cell_row(
     );
 }
 
-/// The cells of row `row - 1` and of row `row` of `shares` (indexed like [`GridShape::triangles`], two
-/// per cell), those that exist: the cells above and below particle row `row`.
-pub(crate) fn cells_around(
-    shape: GridShape,
-    shares: &[DVec3],
+/// The cells above and below particle row `row` of a grid of `rows` particle rows (those that exist):
+/// cell rows `row − 1` and `row`, each as `cell_row` gives it (two shares per cell, indexed like
+/// [`GridShape::triangles`]).
+pub(crate) fn cells_around<'a>(
+    rows: usize,
     row: usize,
-) -> [Option<&[[DVec3; 2]]>; 2] {
-    let (cells, _) = shares.as_chunks::<2>();
-    let cells_per_row = shape.columns - 1;
-    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
-    let cell_row = |r: usize| &cells[r * cells_per_row..(r + 1) * cells_per_row];
+    cell_row: impl Fn(usize) -> &'a [[DVec3; 2]],
+) -> [Option<&'a [[DVec3; 2]]>; 2] {
     [
-        row.checked_sub(1).map(cell_row),
-        (row + 1 < shape.rows).then(|| cell_row(row)),
+        row.checked_sub(1).map(&cell_row),
+        (row + 1 < rows).then(|| cell_row(row)),
     ]
 }
 
@@ -222,23 +219,28 @@ pub(crate) fn add_grid_triangle_forces(
 ) {
     let columns = shape.columns;
     assert_eq!(forces.len(), columns * shape.rows);
+    let (cells, _) = shares.as_chunks::<2>();
+    let cells_per_row = columns - 1;
+    assert_eq!(cells.len(), cells_per_row * (shape.rows - 1));
+    let cell_row = |r: usize| &cells[r * cells_per_row..(r + 1) * cells_per_row];
     let forces = DisjointSlice::new(forces);
     parts(shape.rows, parallel, 8, |rows| {
         for r in rows {
             let particles = r * columns..(r + 1) * columns;
             // SAFETY: the parts of the rows are disjoint.
             let forces = unsafe { forces.slice_mut(particles.clone()) };
-            let [above, below] = cells_around(shape, shares, r);
-            if let Some(body) = body {
-                body_force_row(
+            let around = cells_around(shape.rows, r, cell_row);
+            match body {
+                Some(body) => row_forces(
+                    Some(around),
                     &body.masses[particles.clone()],
                     &body.velocities[particles],
                     body.gravity,
                     body.air_damping,
                     forces,
-                );
+                ),
+                None => add_to_particle_row(around[0], around[1], forces),
             }
-            add_to_particle_row(above, below, forces);
         }
     });
 }

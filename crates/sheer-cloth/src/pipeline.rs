@@ -65,69 +65,38 @@ impl Pipeline {
         parts: usize,
         progress: &Progress,
     ) -> Option<Pipeline> {
-        let balanced = Pipeline::with_shifts(stages, work, parts, &[])?;
-        if progress.shifts.len() + 1 != parts || progress.shifts.iter().all(|&s| s == 0) {
-            return Some(balanced);
-        }
-        // Moved cuts that leave a part too short are not taken.
-        Pipeline::with_shifts(balanced.stages.clone(), work, parts, &progress.shifts)
-            .or(Some(balanced))
-    }
-
-    /// As [`new`](Pipeline::new), cut `p` (`1 ≤ p < parts`) moved by `shifts[p − 1]` rows if given.
-    fn with_shifts(
-        stages: Vec<Stage>,
-        work: &[f64],
-        parts: usize,
-        shifts: &[isize],
-    ) -> Option<Pipeline> {
         let above = stages.iter().map(|s| s.above).max().unwrap_or(0);
         let below = stages.iter().map(|s| s.below).max().unwrap_or(0);
-        // The work before each row (and in all rows, last).
-        let before: Vec<f64> = std::iter::once(0.0)
-            .chain(work.iter().scan(0.0, |sum, w| {
-                *sum += w;
-                Some(*sum)
-            }))
-            .collect();
-        let total = before[work.len()];
-        // Part p starts at the row boundary nearest to p/parts of the work.
-        let cuts = (0..=parts)
-            .map(|p| {
-                if p == parts {
-                    return work.len();
-                }
-                let target = total * p as f64 / parts.max(1) as f64;
-                let after = before.partition_point(|&b| b < target).min(work.len());
-                let cut = match after.checked_sub(1) {
-                    Some(b) if target - before[b] < before[after] - target => b,
-                    _ => after,
-                };
-                let shift = p
-                    .checked_sub(1)
-                    .and_then(|k| shifts.get(k))
-                    .copied()
-                    .unwrap_or(0);
-                cut.saturating_add_signed(shift).min(work.len())
-            })
-            .collect::<Vec<usize>>();
-        if cuts.windows(2).any(|pair| pair[1] < pair[0]) {
-            return None;
-        }
-        let pipeline = Pipeline {
+        let ordered = stages
+            .iter()
+            .enumerate()
+            .all(|(s, stage)| stage.after_all.is_none_or(|k| k < s));
+        // Ascending, and every part taller than the reach of its neighbours' items.
+        let fits = |cuts: &[usize]| {
+            cuts.windows(2)
+                .all(|pair| pair[1] > pair[0] + above + below)
+        };
+        let balanced = balanced_cuts(work, parts);
+        let moved = (progress.shifts.len() + 1 == parts).then(|| {
+            let inner = balanced[1..parts].iter().zip(&progress.shifts);
+            let inner = inner.map(|(&cut, &shift)| cut.saturating_add_signed(shift));
+            std::iter::once(0)
+                .chain(inner)
+                .chain([work.len()])
+                .collect::<Vec<usize>>()
+        });
+        // Moved cuts that leave a part too short are not taken.
+        let cuts = match moved {
+            Some(moved) if fits(&moved) => moved,
+            _ => balanced,
+        };
+        (parts >= 1 && ordered && fits(&cuts)).then_some(Pipeline {
             stages,
             cuts,
             parts,
             above,
             below,
-        };
-        let tall_enough = (0..parts).all(|p| pipeline.cut(p + 1) - pipeline.cut(p) > above + below);
-        let ordered = pipeline
-            .stages
-            .iter()
-            .enumerate()
-            .all(|(s, stage)| stage.after_all.is_none_or(|k| k < s));
-        (parts >= 1 && tall_enough && ordered).then_some(pipeline)
+        })
     }
 
     pub fn parts(&self) -> usize {
@@ -196,6 +165,32 @@ impl Pipeline {
         timing.finished.store(finished, Ordering::Relaxed);
         std::mem::forget(poison);
     }
+}
+
+/// The first row of each of `parts` parts, and the row after the last: part `p` starts at the row
+/// boundary nearest to `p/parts` of the work, `work[r]` being row `r`'s.
+fn balanced_cuts(work: &[f64], parts: usize) -> Vec<usize> {
+    // The work before each row (and in all rows, last).
+    let before: Vec<f64> = std::iter::once(0.0)
+        .chain(work.iter().scan(0.0, |sum, w| {
+            *sum += w;
+            Some(*sum)
+        }))
+        .collect();
+    let total = before[work.len()];
+    (0..=parts)
+        .map(|p| {
+            if p == parts {
+                return work.len();
+            }
+            let target = total * p as f64 / parts as f64;
+            let after = before.partition_point(|&b| b < target).min(work.len());
+            match after.checked_sub(1) {
+                Some(b) if target - before[b] < before[after] - target => b,
+                _ => after,
+            }
+        })
+        .collect()
 }
 
 /// An atomic counter alone on its cache line, so that one part's progress does not move the line that
@@ -297,11 +292,12 @@ impl Progress {
         for k in 0..self.shifts.len() {
             let ((finished_above, took_above), (finished_below, took_below)) =
                 (time(k), time(k + 1));
-            let rows = (pipeline.cut(k + 2) - pipeline.cut(k)) as f64;
-            let row_time = (took_above + took_below) / rows;
+            // The rows of the two parts the cut divides.
+            let rows = pipeline.cut(k + 2) - pipeline.cut(k);
+            let row_time = (took_above + took_below) / rows as f64;
             let late = &mut self.lateness[k];
             *late = 0.8 * *late + 0.2 * (finished_above - finished_below);
-            let limit = (pipeline.cut(k + 2) - pipeline.cut(k)) as isize / 4;
+            let limit = rows as isize / 4;
             let shift = &mut self.shifts[k];
             let step = if *late > row_time && *shift > -limit {
                 -1

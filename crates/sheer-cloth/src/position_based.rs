@@ -19,7 +19,9 @@ use rayon::prelude::*;
 use std::ops::Range;
 
 use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strip};
-use crate::grid_wind::{cell_row, grid_triangle_forces, row_forces as grid_row_forces};
+use crate::grid_wind::{
+    cell_row, cells_around, grid_triangle_forces, row_forces as grid_row_forces,
+};
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts};
 use crate::params::SimParams;
@@ -698,12 +700,7 @@ impl Simulation {
                 if row_forces.is_some() {
                     let cell_row =
                         |r: usize| cells.slice(r * cells_per_row..(r + 1) * cells_per_row);
-                    let around = shares_on.then(|| {
-                        [
-                            row.checked_sub(1).map(cell_row),
-                            (row + 1 < rows).then(|| cell_row(row)),
-                        ]
-                    });
+                    let around = shares_on.then(|| cells_around(rows, row, cell_row));
                     grid_row_forces(
                         around,
                         &masses[range.clone()],

@@ -554,12 +554,13 @@ impl Simulation {
     /// ([`RowForces`]), or, when the triangles are not the grid's own, `None` after summing the forces
     /// into `self.forces` ([`compute_forces`](Simulation::compute_forces)).
     pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<RowForces> {
-        if self.wind_acts() && self.grid_triangulation.is_none() {
+        let shares = self.wind_acts();
+        if shares && self.grid_triangulation.is_none() {
             self.compute_forces(time, false);
             return None;
         }
         Some(RowForces {
-            shares: self.wind_acts(),
+            shares,
             renew: self.due_wind_renewal(time),
         })
     }
@@ -659,10 +660,8 @@ impl Simulation {
     fn divergence(&self) -> Option<DivergenceReason> {
         let parallel = self.parallel();
         let limits = self.params.divergence;
-        let bad_particle = |i: usize| {
-            let (x, v) = (self.positions[i], self.velocities[i]);
-            !x.is_finite() || !v.is_finite() || v.length() > limits.max_speed
-        };
+        let bad_particle =
+            |i: usize| particle_unsound(self.positions[i], self.velocities[i], limits.max_speed);
         let (positions, velocities) = (&self.positions[..], &self.velocities[..]);
         let particle = first_index_screened(
             positions.len(),
@@ -989,21 +988,26 @@ pub(crate) fn spring_force_on_a(
 }
 
 by_cpu! {
-    /// Whether any particle of a block is unsound as [`Simulation::step`]'s divergence check sees it: a
-    /// non-finite position or velocity, or a speed above `max_speed` (m/s). Evaluated for every particle
-    /// without stopping (`|`, not `||`), so that the loop vectorises; the search for the first unsound
-    /// particle then runs only in a block this flags.
+    /// Whether any particle of a block is unsound ([`particle_unsound`]), evaluated for every particle
+    /// without stopping, so that the loop vectorises; the search for the first unsound particle then
+    /// runs only in a block this flags.
     fn any_unsound_particle(positions: &[DVec3], velocities: &[DVec3], max_speed: f64) -> bool {
         let n = positions.len();
         let velocities = &velocities[..n];
-        let finite = |v: DVec3| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
         let mut any = false;
         for i in 0..n {
-            let (x, v) = (positions[i], velocities[i]);
-            any |= !finite(x) | !finite(v) | (v.length() > max_speed);
+            any |= particle_unsound(positions[i], velocities[i], max_speed);
         }
         any
     }
+}
+
+/// Whether a particle at `x` (m) moving at `v` (m/s) is unsound: a non-finite position or velocity, or
+/// a speed above `max_speed` (m/s). Without branches (`|`, not `||`), so that loops over it vectorise.
+#[inline(always)]
+fn particle_unsound(x: DVec3, v: DVec3, max_speed: f64) -> bool {
+    let finite = |v: DVec3| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
+    !finite(x) | !finite(v) | (v.length() > max_speed)
 }
 
 by_cpu! {
