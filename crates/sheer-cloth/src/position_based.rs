@@ -57,6 +57,11 @@ const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
 /// the cuts between the threads' parts, twice the depth each, run on one thread each.
 const WAVEFRONT_ROWS_PER_DEPTH: usize = 10;
 
+thread_local! {
+    /// One row of a grid's forces (N), summed and used by the prediction of that row on this thread.
+    static ROW_FORCES: std::cell::RefCell<Vec<DVec3>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// Particles per rayon task in the per-particle passes.
 const PARTICLE_GRAIN: usize = 4096;
 
@@ -248,14 +253,18 @@ by_cpu! {
 }
 
 /// The long-range attachments of a sweep: each particle's anchor (an index into `pin_positions`) and
-/// tether length (m), the pinned particles, where they are, and scratch for each particle's anchor
-/// position.
+/// tether length (m), the pinned particles, and where they are.
 struct Tethers<'a> {
     anchors: &'a [u32],
     lengths: &'a [f64],
     pinned_indices: &'a [u32],
     pin_positions: DisjointSlice<'a, DVec3>,
-    scratch: DisjointSlice<'a, DVec3>,
+}
+
+thread_local! {
+    /// The anchors' positions (m) of the particles [`Tethers::apply`] is pulling on this thread.
+    static ANCHOR_POSITIONS: std::cell::RefCell<Vec<DVec3>> =
+        const { std::cell::RefCell::new(Vec::new()) };
 }
 
 impl<'a> Tethers<'a> {
@@ -269,7 +278,6 @@ impl<'a> Tethers<'a> {
         anchors: &'a [u32],
         lengths: &'a [f64],
         pin_positions: &'a mut [DVec3],
-        scratch: &'a mut [DVec3],
     ) -> Option<Tethers<'a>> {
         if !simulation_params.long_range_attachments || pinned_indices.is_empty() {
             return None;
@@ -279,7 +287,6 @@ impl<'a> Tethers<'a> {
             lengths,
             pinned_indices,
             pin_positions: DisjointSlice::new(pin_positions),
-            scratch: DisjointSlice::new(scratch),
         })
     }
 
@@ -307,23 +314,22 @@ impl<'a> Tethers<'a> {
     /// Pulls the particles in `range` back within their tethers.
     ///
     /// # Safety
-    /// No other thread may touch `range` of `positions` or of the scratch, or write a gathered pin
-    /// position, while this runs.
+    /// No other thread may touch `range` of `positions`, or write a gathered pin position, while this
+    /// runs.
     unsafe fn apply(&self, range: Range<usize>, positions: &DisjointSlice<'_, DVec3>) {
         // SAFETY: exclusive by the caller's contract.
-        let (x, anchors) = unsafe {
-            (
-                positions.slice_mut(range.clone()),
-                self.scratch.slice_mut(range.clone()),
-            )
-        };
+        let x = unsafe { positions.slice_mut(range.clone()) };
         // Each particle's anchor is copied next to it first: the attachment loop then reads contiguous
-        // memory and vectorises (a gather inside it kept the compiler from it).
-        for (anchor, &k) in anchors.iter_mut().zip(&self.anchors[range.clone()]) {
-            // SAFETY: by the caller's contract, no one writes the pins' positions now.
-            *anchor = unsafe { self.pin_positions.get(k as usize) };
-        }
-        apply_tethers(x, anchors, &self.lengths[range]);
+        // memory and vectorises (a gather inside it kept the compiler from it). The copies go to this
+        // thread's scratch, which stays in its cache (a cloth-sized array went to memory and back).
+        ANCHOR_POSITIONS.with_borrow_mut(|anchors| {
+            anchors.clear();
+            anchors.extend(self.anchors[range.clone()].iter().map(|&k| {
+                // SAFETY: by the caller's contract, no one writes the pins' positions now.
+                unsafe { self.pin_positions.get(k as usize) }
+            }));
+            apply_tethers(x, anchors, &self.lengths[range]);
+        });
     }
 }
 
@@ -331,7 +337,7 @@ impl<'a> Tethers<'a> {
 /// sweep the velocities from the position change over the sub-step (`inverse_h = 1/h`, 1/s).
 ///
 /// # Safety
-/// No other thread may touch `range` of `positions`, `velocities` or the tethers' scratch, or write it
+/// No other thread may touch `range` of `positions` or `velocities`, or write it
 /// in `previous`, while this runs.
 unsafe fn end_sweep(
     range: Range<usize>,
@@ -395,7 +401,6 @@ impl Simulation {
             packed,
             tether_anchors,
             tether_lengths,
-            tether_anchor_positions,
             tether_pin_positions,
             pinned_indices,
             params,
@@ -413,7 +418,6 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_pin_positions,
-            tether_anchor_positions,
         );
         let previous = DisjointSlice::new(previous_positions);
         // SAFETY: no pass writes the start positions.
@@ -506,7 +510,7 @@ impl Simulation {
             forces,
             tether_anchors,
             tether_lengths,
-            tether_anchor_positions,
+            tether_row_reach,
             tether_pin_positions,
             pinned_indices,
             params,
@@ -562,7 +566,9 @@ impl Simulation {
         } else {
             1
         };
-        // The sweeps as one wavefront: the batches of every sweep, each followed by the sweep's end.
+        let renew = row_forces.and_then(|r| r.renew);
+        // The sub-step as one wavefront: the wind's shares (when due) and the prediction, then the batches
+        // of every sweep, each sweep followed by its end.
         let wavefront = 'plan: {
             // Decided before the plan is built, so that a small cloth's sub-step builds none.
             let parts = match sweep_order {
@@ -575,9 +581,17 @@ impl Simulation {
                 GridSweep::Auto if positions.len() < WAVEFRONT_MIN_PARTICLES => break 'plan None,
                 GridSweep::Auto => threads,
             };
-            let sweep_spans = by_last_row.iter().map(|(_, span)| *span).chain([0]);
-            let spans: Vec<usize> = (0..iterations).flat_map(|_| sweep_spans.clone()).collect();
-            let plan = Wavefront::new(spans, rows);
+            let items = WaveItem::of_substep(
+                renew.is_some(),
+                by_last_row,
+                iterations,
+                if params.long_range_attachments {
+                    *tether_row_reach
+                } else {
+                    0
+                },
+            );
+            let plan = Wavefront::new(items.iter().map(|(_, span)| *span).collect(), rows);
             if sweep_order == GridSweep::Auto
                 && threads > 1
                 && rows < WAVEFRONT_ROWS_PER_DEPTH * threads * plan.depth()
@@ -588,9 +602,12 @@ impl Simulation {
             if let GridSweep::Wavefront { parts } = sweep_order {
                 assert!(plan.fits(parts), "{parts} parts do not fit {rows} rows");
             }
-            plan.fits(parts).then_some((plan, parts))
+            plan.fits(parts).then_some((plan, parts, items))
         };
-        let renew = row_forces.and_then(|r| r.renew);
+        // Whether the wavefront does the wind and the prediction itself.
+        let prediction_in_wavefront = wavefront
+            .as_ref()
+            .is_some_and(|(_, _, items)| matches!(items[0].0, WaveItem::Wind | WaveItem::Predict));
         // The whole sub-step as one hand-off to a team whose threads each keep their own rows.
         let pipeline = 'plan: {
             let team = parallel.then(team_in_equal_parts).flatten();
@@ -624,6 +641,7 @@ impl Simulation {
             pipeline_plan.plan.as_ref()
         };
         if pipeline.is_none()
+            && !prediction_in_wavefront
             && let Some((wind, air_velocity)) = renew
         {
             grid_triangle_forces(
@@ -650,7 +668,6 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_pin_positions,
-            tether_anchor_positions,
         );
         let project_one = |strip: &Strip| {
             let family = family[family_index(strip.kind)];
@@ -697,27 +714,37 @@ impl Simulation {
             // SAFETY: each row goes to one part of a pass; the cells around it are written by the wind
             // before (a pass before, or the pipeline's stage before, on any part).
             unsafe {
+                let predict = |forces: &[DVec3]| {
+                    predict_positions(
+                        h,
+                        &inverse_masses[range.clone()],
+                        forces,
+                        positions.slice_mut(range.clone()),
+                        velocities.slice_mut(range.clone()),
+                        previous.slice_mut(range.clone()),
+                    )
+                };
                 if row_forces.is_some() {
-                    let cell_row =
-                        |r: usize| cells.slice(r * cells_per_row..(r + 1) * cells_per_row);
-                    let around = shares_on.then(|| cells_around(rows, row, cell_row));
-                    grid_row_forces(
-                        around,
-                        &masses[range.clone()],
-                        velocities.slice(range.clone()),
-                        gravity,
-                        air_damping,
-                        forces.slice_mut(range.clone()),
-                    );
+                    // Summed into this thread's row of scratch, which stays in its cache, rather than
+                    // into `forces`: on a large cloth that array's writes and reads went to memory.
+                    ROW_FORCES.with_borrow_mut(|row_forces| {
+                        row_forces.resize(columns, DVec3::ZERO);
+                        let cell_row =
+                            |r: usize| cells.slice(r * cells_per_row..(r + 1) * cells_per_row);
+                        let around = shares_on.then(|| cells_around(rows, row, cell_row));
+                        grid_row_forces(
+                            around,
+                            &masses[range.clone()],
+                            velocities.slice(range.clone()),
+                            gravity,
+                            air_damping,
+                            row_forces,
+                        );
+                        predict(row_forces);
+                    });
+                } else {
+                    predict(forces.slice(range.clone()));
                 }
-                predict_positions(
-                    h,
-                    &inverse_masses[range.clone()],
-                    forces.slice(range.clone()),
-                    positions.slice_mut(range.clone()),
-                    velocities.slice_mut(range.clone()),
-                    previous.slice_mut(range),
-                )
             };
         };
         // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
@@ -738,26 +765,28 @@ impl Simulation {
                 project_row(0..opening, row);
             }
         };
+        // The wind's shares of cell row `row`, from particle rows `row` and `row + 1`.
+        let wind_cell_row = |row: usize| {
+            let (wind, air_velocity) = renew.expect("a wind item renews the shares");
+            let rows_of_cell = row * columns..(row + 2) * columns;
+            // SAFETY: the pipeline and the wavefront run cell row `row` on one part, while no part
+            // writes particle rows `row` and `row + 1` or reads the cell row.
+            unsafe {
+                cell_row(
+                    columns,
+                    &wind,
+                    air_velocity,
+                    positions.slice(rows_of_cell.clone()),
+                    velocities.slice(rows_of_cell),
+                    cells.slice_mut(row * cells_per_row..(row + 1) * cells_per_row),
+                )
+            };
+        };
         if let Some(plan) = pipeline {
             progress.reset(plan.pipeline.parts());
             let shared_progress = &*progress;
             let run_item = |stage: usize, row: usize| match plan.kinds[stage] {
-                StageKind::Wind => {
-                    let (wind, air_velocity) = renew.expect("a wind stage renews the shares");
-                    let rows_of_cell = row * columns..(row + 2) * columns;
-                    // SAFETY: the pipeline runs cell row `row` on one part, while no part writes
-                    // particle rows `row` and `row + 1` or reads the cell row (the stage's reach).
-                    unsafe {
-                        cell_row(
-                            columns,
-                            &wind,
-                            air_velocity,
-                            positions.slice(rows_of_cell.clone()),
-                            velocities.slice(rows_of_cell),
-                            cells.slice_mut(row * cells_per_row..(row + 1) * cells_per_row),
-                        )
-                    };
-                }
+                StageKind::Wind => wind_cell_row(row),
                 StageKind::Open => {
                     predict_row(row);
                     project_row(0..opening, row);
@@ -781,44 +810,55 @@ impl Simulation {
             progress.rebalance(&plan.pipeline);
             return;
         }
-        // First pass: the forces (unless summed already) and the prediction, then, pass by pass, the
-        // opening batches, row by row. The attachments then gather the pins' predicted positions, which no
-        // projection moves (inverse mass 0).
-        parts(rows, parallel, row_grain, |rows| {
-            for row in rows {
-                predict_row(row);
-                if wavefront.is_none() {
-                    project_row(0..opening, row);
+        // First pass (unless the wavefront does it): the forces (unless summed already) and the
+        // prediction, then, pass by pass, the opening batches, row by row. The attachments then gather the
+        // pins' predicted positions, which no projection moves (inverse mass 0).
+        if !prediction_in_wavefront {
+            parts(rows, parallel, row_grain, |rows| {
+                for row in rows {
+                    predict_row(row);
+                    if wavefront.is_none() {
+                        project_row(0..opening, row);
+                    }
                 }
+            });
+            if let Some(tethers) = &tethers {
+                // SAFETY: no pass is running.
+                unsafe { tethers.gather(0..positions.len(), &positions) };
             }
-        });
-        if let Some(tethers) = &tethers {
-            // SAFETY: no pass is running.
-            unsafe { tethers.gather(0..positions.len(), &positions) };
         }
-        if let Some((plan, parts_count)) = wavefront {
-            // Items per sweep: the batches, then the sweep's end.
-            let per_sweep = batches.len() + 1;
-            let run_item = |item: usize, row: usize| {
-                let (sweep, batch) = (item / per_sweep, item % per_sweep);
-                if batch < batches.len() {
+        if let Some((plan, parts_count, items)) = wavefront {
+            let run_item = |item: usize, row: usize| match items[item].0 {
+                // Last row `row` of the cell row above it (none above the first row).
+                WaveItem::Wind => {
+                    if row > 0 {
+                        wind_cell_row(row - 1)
+                    }
+                }
+                WaveItem::Predict => {
+                    predict_row(row);
+                    if let Some(tethers) = &tethers {
+                        // SAFETY: a row's pins are read by the attachments of rows up to the tethers'
+                        // reach away, which `WaveItem::of_substep` keeps behind this item.
+                        unsafe { tethers.gather(particles_of(row), &positions) };
+                    }
+                }
+                WaveItem::Batch(batch) => {
                     strips[by_last_row[batch].0[row].clone()]
                         .iter()
                         .for_each(project_one);
-                } else {
-                    let last = sweep + 1 == iterations as usize;
-                    // SAFETY: the wavefront gives each row's end of a sweep to one part or seam, after
-                    // every strip that touches the row in that sweep and before any of the next.
-                    unsafe {
-                        end_sweep(
-                            particles_of(row),
-                            tethers.as_ref(),
-                            last.then_some((&velocities, 1.0 / h)),
-                            &positions,
-                            &previous,
-                        )
-                    };
                 }
+                // SAFETY: the wavefront gives each row's end of a sweep to one part or seam, after
+                // every strip that touches the row in that sweep and before any of the next.
+                WaveItem::End { last } => unsafe {
+                    end_sweep(
+                        particles_of(row),
+                        tethers.as_ref(),
+                        last.then_some((&velocities, 1.0 / h)),
+                        &positions,
+                        &previous,
+                    )
+                },
             };
             // Each part's own strips need nothing across a cut, so the parts run at once; the seams
             // around the cuts need both neighbours' parts done, and touch disjoint rows of their own.
@@ -848,6 +888,52 @@ impl Simulation {
                 rows.for_each(|row| close_row(row, last))
             });
         }
+    }
+}
+
+/// What an item of a grid sub-step's wavefront ([`Wavefront`]) does on its last row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum WaveItem {
+    /// The wind's shares of the cell row above the row (span 1: the cell row joins two particle rows).
+    Wind,
+    /// The forces and the prediction of the row; the row's pins gathered for the attachments.
+    Predict,
+    /// The strips of a batch that end on the row.
+    Batch(usize),
+    /// The end of a sweep on the row ([`end_sweep`]); `last`: the sub-step's last sweep.
+    End { last: bool },
+}
+
+impl WaveItem {
+    /// The items of a sub-step of `sweeps` sweeps over the batches `by_last_row`, with their row spans:
+    /// the wind's shares when `renew`, the prediction, then each sweep's batches and its end.
+    ///
+    /// The wind and the prediction join the wavefront only when the attachments allow it: a row's end
+    /// reads the gathered positions of pins up to `tether_row_reach` rows away, so their prediction must
+    /// run at least that many rows ahead of the first sweep's end, which runs as many rows behind it as
+    /// the batches' spans add up to (`wavefront.rs`: item `i` runs `lagᵢ` rows behind the first). If they
+    /// do not, the prediction is a pass of its own before the wavefront (and the pins gathered after it).
+    fn of_substep(
+        renew: bool,
+        by_last_row: &[(Vec<Range<usize>>, usize)],
+        sweeps: u32,
+        tether_row_reach: usize,
+    ) -> Vec<(WaveItem, usize)> {
+        let lag_of_first_end: usize = by_last_row.iter().map(|(_, span)| span).sum();
+        let mut items = Vec::new();
+        if tether_row_reach <= lag_of_first_end {
+            if renew {
+                items.push((WaveItem::Wind, 1));
+            }
+            items.push((WaveItem::Predict, 0));
+        }
+        for sweep in 0..sweeps {
+            let batches = by_last_row.iter().enumerate();
+            items.extend(batches.map(|(batch, (_, span))| (WaveItem::Batch(batch), *span)));
+            let last = sweep + 1 == sweeps;
+            items.push((WaveItem::End { last }, 0));
+        }
+        items
     }
 }
 
@@ -1096,8 +1182,9 @@ mod tests {
     #[test]
     fn the_wavefront_gives_the_bits_of_pass_by_pass() {
         use crate::sim::GridSweep;
-        // (method, sweeps per sub-step, part counts): a sweep's wavefront is 10 rows deep, and each part
-        // needs twice the depth, so 131 rows take up to 6 parts of one sweep and 3 of two.
+        // (method, sweeps per sub-step, part counts): a sweep's wavefront is 10 rows deep, with the wind
+        // and the prediction 11, and each part needs twice the depth, so 133 rows take up to 6 parts of
+        // one sweep and 3 of two (21 deep).
         let cases = [
             (
                 Method::SmallStepsXpbd { substeps: 20 },
@@ -1122,7 +1209,7 @@ mod tests {
                 vec![1, 3],
             ),
         ];
-        let rows = 131;
+        let rows = 133;
         // The batches' row spans, as the schedule's own test takes them (`wavefront.rs`).
         let sim = windy_flag(9, rows, 3.0, Method::default(), false);
         let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
@@ -1137,7 +1224,7 @@ mod tests {
             };
             let passes = run(GridSweep::Passes, 1);
             for parts in part_counts {
-                assert!(rows >= parts * 2 * 10 * sweeps, "{parts} parts fit");
+                assert!(rows >= parts * 2 * (1 + 10 * sweeps), "{parts} parts fit");
                 // The parts one after another on one thread, and on as many threads as parts (two
                 // when one part: a team of two on one part and one seam-less pass).
                 for threads in [1, parts.max(2)] {
@@ -1145,6 +1232,64 @@ mod tests {
                         passes,
                         run(GridSweep::Wavefront { parts }, threads),
                         "{method:?}: the wavefront in {parts} parts on {threads} threads"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The wavefront with the wind's shares and the prediction among its items gives the bits of pass by
+    /// pass, and so does the wavefront that leaves them to a pass of their own: with the wind renewed
+    /// every sub-step, held for three and off, and pins whose attachments reach 0, 1 and 66 rows (the
+    /// last too far for the prediction to run in the wavefront), on one part and three, on one thread
+    /// and three.
+    #[test]
+    fn the_wavefront_with_the_prediction_gives_the_bits_of_pass_by_pass() {
+        use crate::sim::GridSweep;
+        let (columns, rows) = (9, 133);
+        let hoist = |every: usize| -> Vec<usize> {
+            (0..rows).step_by(every).map(|r| r * columns).collect()
+        };
+        // (pinned particles, rows between a particle and its anchor at most, prediction in the wavefront)
+        let pin_sets = [
+            (hoist(1), 0, true),
+            (hoist(3), 1, true),
+            (vec![0, (rows - 1) * columns], 66, false),
+        ];
+        let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
+        for (pins, reach, in_wavefront) in pin_sets {
+            for (speed, interval) in winds {
+                let run = |sweep: GridSweep, threads: usize| {
+                    let spec = GridSpec {
+                        columns,
+                        rows,
+                        height: 3.0,
+                        ..GridSpec::default()
+                    };
+                    let mut model = ClothModel::grid(&spec).unwrap();
+                    model.pin(&pins).unwrap();
+                    let mut params = SimParams {
+                        method: Method::SmallStepsXpbd { substeps: 20 },
+                        ..SimParams::default()
+                    };
+                    params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
+                    params.wind.substeps_per_update = interval;
+                    params.parallel_min_particles = if threads > 1 { 0 } else { usize::MAX };
+                    let mut sim = Simulation::new(model, params).unwrap();
+                    assert_eq!(sim.tether_row_reach, reach);
+                    let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
+                    let items = super::WaveItem::of_substep(true, by_last_row, 1, reach);
+                    assert_eq!(items[0].0 == super::WaveItem::Wind, in_wavefront);
+                    sim.grid_sweep = sweep;
+                    turning_pole_bits(sim, threads, 8)
+                };
+                let passes = run(GridSweep::Passes, 1);
+                for (parts, threads) in [(1, 1), (3, 1), (3, 3)] {
+                    assert_eq!(
+                        passes,
+                        run(GridSweep::Wavefront { parts }, threads),
+                        "reach {reach}, wind {speed} m/s every {interval}: {parts} parts on \
+                         {threads} threads"
                     );
                 }
             }

@@ -131,12 +131,13 @@ pub struct Simulation {
     pub(crate) positions: Vec<DVec3>,
     pub(crate) velocities: Vec<DVec3>,
     /// Long-range attachments: particle `i` may lie at most `tether_lengths[i]` (m) from pinned particle
-    /// `pinned_indices[tether_anchors[i]]`. Pinned particles, and every particle of a cloth without pins,
-    /// have an infinite length (never pulled).
+    /// `pinned_indices[tether_anchors[i]]`. Pinned particles (anchored to themselves), and every particle
+    /// of a cloth without pins, have an infinite length (never pulled).
     pub(crate) tether_anchors: Vec<u32>,
     pub(crate) tether_lengths: Vec<f64>,
-    /// Scratch: where each particle's anchor is, read by the attachments.
-    pub(crate) tether_anchor_positions: Vec<DVec3>,
+    /// On a grid, how many rows at most lie between a particle and its anchor (0 without pins): how far
+    /// ahead of a row's attachments the pins' positions must be known.
+    pub(crate) tether_row_reach: usize,
     /// Scratch: where each pinned particle is, in `pinned_indices` order, read by the attachments.
     pub(crate) tether_pin_positions: Vec<DVec3>,
     /// Where each pinned particle (in `pinned_indices` order) must be at the end of the next step.
@@ -313,14 +314,33 @@ impl Simulation {
         let spring_count = springs.len();
         let triangle_count = model.triangles.len();
         // Nearest pinned particle at rest, by straight-line distance (the geodesic on a flat sheet).
-        let (tether_anchors, tether_lengths) = nearest_points(&pin_targets, &model.positions)
-            .into_iter()
-            .zip(&model.pinned)
-            .map(|(nearest, &pinned)| match nearest {
-                Some(anchor) if !pinned => anchor,
-                _ => (0, f64::INFINITY),
-            })
-            .unzip();
+        // A pinned particle is anchored to itself, so that its row's attachments read no other row's pin.
+        let mut pins_so_far = 0;
+        let (tether_anchors, tether_lengths): (Vec<u32>, Vec<f64>) =
+            nearest_points(&pin_targets, &model.positions)
+                .into_iter()
+                .zip(&model.pinned)
+                .map(|(nearest, &pinned)| match nearest {
+                    Some(anchor) if !pinned => anchor,
+                    _ if pinned => {
+                        pins_so_far += 1;
+                        (pins_so_far - 1, f64::INFINITY)
+                    }
+                    _ => (0, f64::INFINITY),
+                })
+                .unzip();
+        let tether_row_reach = match model.grid {
+            Some(shape) if !pinned_indices.is_empty() => tether_anchors
+                .iter()
+                .enumerate()
+                .map(|(i, &k)| {
+                    let anchor = pinned_indices[k as usize] as usize;
+                    (anchor / shape.columns).abs_diff(i / shape.columns)
+                })
+                .max()
+                .unwrap_or(0),
+            _ => 0,
+        };
         Ok(Simulation {
             wind: WindField::new(&params.wind),
             family: family_coefficients(&params),
@@ -338,7 +358,7 @@ impl Simulation {
             pin_starts: pin_targets.clone(),
             tether_anchors,
             tether_lengths,
-            tether_anchor_positions: vec![DVec3::ZERO; n],
+            tether_row_reach,
             tether_pin_positions: vec![DVec3::ZERO; pinned_indices.len()],
             pin_targets,
             pinned_indices,
