@@ -7,8 +7,8 @@
 //! parallel with the same result), then velocities from the position change. The batches are a grid's
 //! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a grid the batches
 //! along rows share a pass over the rows with the forces and the prediction before them, or with the
-//! attachments and the velocities after them; a large grid runs all its batches in one pass, as a
-//! wavefront down the rows ([`Wavefront`]). In parallel, a grid's passes go to the simulation's team
+//! attachments and the velocities after them; a large grid runs its whole sub-step (wind, prediction,
+//! every batch) in one pass, as a wavefront down the rows ([`Wavefront`]). In parallel, a grid's passes go to the simulation's team
 //! of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in equal parts (a cloth
 //! below 16 384 particles), a grid's whole sub-step is one hand-off, each thread on its own rows
 //! ([`Pipeline`]).
@@ -76,7 +76,7 @@ impl Simulation {
         pbd_stiffness: Option<f64>,
     ) {
         let on_grid = self.grid_constraints.is_some();
-        // A grid sums each row's forces in its first pass over the rows when it can.
+        // A grid sums each row's forces where it predicts the row when it can.
         let row_forces = if on_grid {
             self.prepare_row_forces(t)
         } else {
@@ -85,7 +85,7 @@ impl Simulation {
         };
         let parallel = self.parallel();
         if !on_grid {
-            // A grid predicts row by row inside its first constraint pass (`project_grid_constraints`).
+            // A grid predicts row by row inside its constraint passes (`project_grid_constraints`).
             let Simulation {
                 positions,
                 velocities,
@@ -261,6 +261,9 @@ struct Tethers<'a> {
     pin_positions: DisjointSlice<'a, DVec3>,
 }
 
+/// Particles per chunk of [`Tethers::apply`]: a grid row of up to 1024 columns in one.
+const ANCHOR_CHUNK: usize = 1024;
+
 thread_local! {
     /// The anchors' positions (m) of the particles [`Tethers::apply`] is pulling on this thread.
     static ANCHOR_POSITIONS: std::cell::RefCell<Vec<DVec3>> =
@@ -299,7 +302,7 @@ impl<'a> Tethers<'a> {
     /// Gathers where the pinned particles among `particles` are now.
     ///
     /// # Safety
-    /// No other thread may write those particles of `positions`, or read or write the pins' gathered
+    /// No other thread may write those particles of `positions`, or read or write those pins' gathered
     /// positions, while this runs.
     unsafe fn gather(&self, particles: Range<usize>, positions: &DisjointSlice<'_, DVec3>) {
         for k in self.pins_among(particles) {
@@ -314,21 +317,26 @@ impl<'a> Tethers<'a> {
     /// Pulls the particles in `range` back within their tethers.
     ///
     /// # Safety
-    /// No other thread may touch `range` of `positions`, or write a gathered pin position, while this
-    /// runs.
+    /// No other thread may touch `range` of `positions`, or write the gathered positions of the pins
+    /// that `range`'s particles are anchored to, while this runs.
     unsafe fn apply(&self, range: Range<usize>, positions: &DisjointSlice<'_, DVec3>) {
         // SAFETY: exclusive by the caller's contract.
         let x = unsafe { positions.slice_mut(range.clone()) };
         // Each particle's anchor is copied next to it first: the attachment loop then reads contiguous
         // memory and vectorises (a gather inside it kept the compiler from it). The copies go to this
-        // thread's scratch, which stays in its cache (a cloth-sized array went to memory and back).
+        // thread's scratch, a chunk at a time so that it stays small and in the cache (a cloth-sized
+        // array went to memory and back).
         ANCHOR_POSITIONS.with_borrow_mut(|anchors| {
-            anchors.clear();
-            anchors.extend(self.anchors[range.clone()].iter().map(|&k| {
-                // SAFETY: by the caller's contract, no one writes the pins' positions now.
-                unsafe { self.pin_positions.get(k as usize) }
-            }));
-            apply_tethers(x, anchors, &self.lengths[range]);
+            let starts = range.clone().step_by(ANCHOR_CHUNK);
+            for (start, x) in starts.zip(x.chunks_mut(ANCHOR_CHUNK)) {
+                let chunk = start..start + x.len();
+                anchors.clear();
+                anchors.extend(self.anchors[chunk.clone()].iter().map(|&k| {
+                    // SAFETY: by the caller's contract, no one writes these pins' positions now.
+                    unsafe { self.pin_positions.get(k as usize) }
+                }));
+                apply_tethers(x, anchors, &self.lengths[chunk]);
+            }
         });
     }
 }
@@ -337,8 +345,8 @@ impl<'a> Tethers<'a> {
 /// sweep the velocities from the position change over the sub-step (`inverse_h = 1/h`, 1/s).
 ///
 /// # Safety
-/// No other thread may touch `range` of `positions` or `velocities`, or write it
-/// in `previous`, while this runs.
+/// No other thread may touch `range` of `positions` or `velocities`, write it in `previous`, or write
+/// the gathered positions of the pins its particles are anchored to, while this runs.
 unsafe fn end_sweep(
     range: Range<usize>,
     tethers: Option<&Tethers<'_>>,
@@ -490,11 +498,12 @@ impl Simulation {
     /// so each part of the team keeps its rows from one to the next, and a sub-step takes eleven passes
     /// instead of sixteen, with the same arithmetic in the same order for every particle (tested). On a
     /// team in equal parts the whole sub-step is one hand-off instead, each thread on its own rows
-    /// ([`Pipeline`]); a large grid runs every batch of the sub-step in one more pass after the forces
-    /// and the prediction, as a wavefront down the rows ([`Wavefront`]). Same bits either way, tested.
+    /// ([`Pipeline`]); a large grid runs the whole sub-step (the wind's shares, the forces and the
+    /// prediction, then every batch) in one pass, as a wavefront down the rows ([`Wavefront`],
+    /// [`WaveItem`]). Same bits either way, tested.
     ///
-    /// `row_forces` ([`Simulation::prepare_row_forces`]): `Some` when the first pass sums each row's
-    /// forces itself, `None` when they are in `self.forces` already.
+    /// `row_forces` ([`Simulation::prepare_row_forces`]): `Some` when the prediction of each row sums
+    /// the row's forces itself, `None` when they are in `self.forces` already.
     fn project_grid_constraints<const PBD: bool, const MULTIPLIERS: bool>(
         &mut self,
         h: f64,
@@ -712,7 +721,8 @@ impl Simulation {
         let predict_row = |row: usize| {
             let range = particles_of(row);
             // SAFETY: each row goes to one part of a pass; the cells around it are written by the wind
-            // before (a pass before, or the pipeline's stage before, on any part).
+            // before (a pass before, the pipeline's stage before on any part, or the wavefront's wind
+            // item, a row ahead).
             unsafe {
                 let predict = |forces: &[DVec3]| {
                     predict_positions(
@@ -1238,11 +1248,83 @@ mod tests {
         }
     }
 
+    /// The attachments of a row read the pins' positions that the prediction of rows up to the reach away
+    /// gathers: in the wavefront's schedule every such prediction runs surely before (earlier on the same
+    /// part or seam, or on a part while the attachments run on a seam), for the solver's items with and
+    /// without the wind, one sweep and two, every reach `WaveItem::of_substep` lets in and every number
+    /// of parts that fits; and one row more of reach would break it, so its bound is the exact one.
+    #[test]
+    fn the_prediction_runs_before_every_attachment_that_reads_its_pins() {
+        use super::WaveItem;
+        use crate::wavefront::Wavefront;
+        use crate::wavefront::tests::{before, schedule};
+        let sim = windy_flag(9, 20, 3.0, Method::default(), false);
+        let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
+        let spans_of = |items: &[(WaveItem, usize)]| items.iter().map(|(_, span)| *span).collect();
+        // Whether every end of a sweep runs surely after the predictions within `reach` rows of it.
+        let ordered = |items: &[(WaveItem, usize)], reach: usize, rows: usize, parts: usize| {
+            let slots = schedule(&Wavefront::new(spans_of(items), rows), parts);
+            let predict = items
+                .iter()
+                .position(|(item, _)| *item == WaveItem::Predict);
+            let predict = predict.expect("the prediction is in the wavefront");
+            items
+                .iter()
+                .enumerate()
+                .filter(|(_, (item, _))| matches!(item, WaveItem::End { .. }))
+                .all(|(end, _)| {
+                    (0..rows).all(|row| {
+                        let pins = row.saturating_sub(reach)..(row + reach + 1).min(rows);
+                        pins.clone()
+                            .all(|pin_row| before(slots[&(predict, pin_row)], slots[&(end, row)]))
+                    })
+                })
+        };
+        let mut checked = 0;
+        for sweeps in [1, 2] {
+            for renew in [true, false] {
+                for reach in 0..=12 {
+                    let items = WaveItem::of_substep(renew, by_last_row, sweeps, reach);
+                    let fused = items.iter().any(|(item, _)| *item == WaveItem::Predict);
+                    assert_eq!(fused, reach <= 10, "reach {reach}");
+                    if !fused {
+                        continue;
+                    }
+                    for rows in [40, 61, 131, 240] {
+                        let plan = Wavefront::new(spans_of(&items), rows);
+                        for parts in (1..=6).filter(|&parts| plan.fits(parts)) {
+                            assert!(
+                                ordered(&items, reach, rows, parts),
+                                "reach {reach}, {sweeps} sweeps, wind {renew}: {rows} rows, \
+                                 {parts} parts"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 100, "{checked} schedules checked");
+        // The same items at a reach of 11: somewhere an end of a sweep would not follow a prediction it
+        // reads.
+        let items = WaveItem::of_substep(true, by_last_row, 1, 10);
+        let broken = [40, 61, 131, 240].into_iter().any(|rows| {
+            let plan = Wavefront::new(spans_of(&items), rows);
+            (1..=6)
+                .filter(|&parts| plan.fits(parts))
+                .any(|parts| !ordered(&items, 11, rows, parts))
+        });
+        assert!(
+            broken,
+            "a reach of 11 would be safe too: the bound is not the exact one"
+        );
+    }
+
     /// The wavefront with the wind's shares and the prediction among its items gives the bits of pass by
     /// pass, and so does the wavefront that leaves them to a pass of their own: with the wind renewed
-    /// every sub-step, held for three and off, and pins whose attachments reach 0, 1 and 66 rows (the
-    /// last too far for the prediction to run in the wavefront), on one part and three, on one thread
-    /// and three.
+    /// every sub-step, held for three and off, and pins whose attachments reach 0, 1, 10, 11 and 66 rows
+    /// (the last two too far for the prediction to run in the wavefront), on one part and three, on one
+    /// thread and three; and with the forces summed beforehand by the general triangle path.
     #[test]
     fn the_wavefront_with_the_prediction_gives_the_bits_of_pass_by_pass() {
         use crate::sim::GridSweep;
@@ -1250,14 +1332,18 @@ mod tests {
         let hoist = |every: usize| -> Vec<usize> {
             (0..rows).step_by(every).map(|r| r * columns).collect()
         };
-        // (pinned particles, rows between a particle and its anchor at most, prediction in the wavefront)
-        let pin_sets = [
-            (hoist(1), 0, true),
-            (hoist(3), 1, true),
-            (vec![0, (rows - 1) * columns], 66, false),
+        // (pinned particles, rows between a particle and its anchor at most, prediction in the
+        // wavefront, forces summed beforehand by the general triangle path)
+        let cases = [
+            (hoist(1), 0, true, false),
+            (hoist(1), 0, true, true),
+            (hoist(3), 1, true, false),
+            (hoist(21), 10, true, false),
+            (hoist(22), 11, false, false),
+            (vec![0, (rows - 1) * columns], 66, false, false),
         ];
         let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
-        for (pins, reach, in_wavefront) in pin_sets {
+        for (pins, reach, in_wavefront, general) in cases {
             for (speed, interval) in winds {
                 let run = |sweep: GridSweep, threads: usize| {
                     let spec = GridSpec {
@@ -1280,6 +1366,9 @@ mod tests {
                     let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
                     let items = super::WaveItem::of_substep(true, by_last_row, 1, reach);
                     assert_eq!(items[0].0 == super::WaveItem::Wind, in_wavefront);
+                    if general {
+                        sim.grid_triangulation = None; // summed into `forces` by the general path
+                    }
                     sim.grid_sweep = sweep;
                     turning_pole_bits(sim, threads, 8)
                 };
@@ -1288,8 +1377,8 @@ mod tests {
                     assert_eq!(
                         passes,
                         run(GridSweep::Wavefront { parts }, threads),
-                        "reach {reach}, wind {speed} m/s every {interval}: {parts} parts on \
-                         {threads} threads"
+                        "reach {reach}, wind {speed} m/s every {interval}, general path \
+                         {general}: {parts} parts on {threads} threads"
                     );
                 }
             }

@@ -3,7 +3,9 @@
 //! Batch by batch, a sub-step reads the whole cloth a dozen times; once the cloth outgrows a core's
 //! cache, each of those passes streams it from memory again. But every strip of a batch touches only
 //! the rows `r − span ..= r` of its last row `r`, so the batches can follow each other down the rows a
-//! few rows apart. Call the batches (and the per-row work after them) *items* `0, 1, …`, with
+//! few rows apart. Call the batches (and the per-row work before and after them: a cell row of the wind,
+//! which reads and so *touches* the two particle rows it joins, span 1; a row's prediction, span 0;
+//! a row's end of a sweep) *items* `0, 1, …`, with
 //! `lag₀ = 0` and `lagᵢ₊₁ = lagᵢ + spanᵢ`. At step `t = 0, 1, …` item `i` runs on last row `t − lagᵢ`,
 //! the items of one step in their order. Two strips that share a particle, of items `i < j` on last
 //! rows `rᵢ` and `rⱼ`, share a row, so `rᵢ − spanᵢ ≤ rⱼ`; then `rᵢ + lagᵢ ≤ rⱼ + lagᵢ + spanᵢ ≤ rⱼ + lagⱼ`:
@@ -124,15 +126,16 @@ impl Wavefront {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::collections::HashMap;
 
     /// Where an (item, last row) ran: phase 0 (parts) or 1 (seams), which part or seam, and its place in
     /// that sequence.
-    type Slot = (u8, usize, usize);
+    pub(crate) type Slot = (u8, usize, usize);
 
-    fn schedule(plan: &Wavefront, parts: usize) -> HashMap<(usize, usize), Slot> {
+    /// Where each (item, last row) of `plan` in `parts` parts runs (each exactly once, asserted).
+    pub(crate) fn schedule(plan: &Wavefront, parts: usize) -> HashMap<(usize, usize), Slot> {
         let mut slots = HashMap::new();
         let mut record = |phase: u8, which: usize| {
             let mut order = Vec::new();
@@ -160,7 +163,7 @@ mod tests {
 
     /// Whether `a` surely runs before `b`: earlier in the same sequence, or in a part while `b` is in a
     /// seam. Parts (and seams) run concurrently, so neither runs before the other there.
-    fn before(a: Slot, b: Slot) -> bool {
+    pub(crate) fn before(a: Slot, b: Slot) -> bool {
         (a.0 == b.0 && a.1 == b.1 && a.2 < b.2) || (a.0 == 0 && b.0 == 1)
     }
 
