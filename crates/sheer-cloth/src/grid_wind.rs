@@ -1,8 +1,8 @@
 //! The wind pass of a grid cloth, one row of cells at a time, written so that the compiler vectorises it.
 //!
 //! Per sub-step the wind costs one [`aerodynamic_force`](crate::wind::aerodynamic_force) per triangle:
-//! two square roots and two divisions (the mean velocity and the corner share are multiplied by a third).
-//! One triangle at a time, the divider bounds the pass. On a grid the two triangles of cell (row, column)
+//! one square root, one division and about forty other operations (the mean velocity and the corner
+//! share are multiplied by a third). One triangle at a time, the divider bounds the pass. On a grid the two triangles of cell (row, column)
 //! read corners that sit at consecutive indices along a row, so the loop below reads contiguous memory and
 //! the compiler turns it into 4- or 8-wide vector arithmetic. The arithmetic per triangle is exactly that
 //! of the general path ([`corner_share_of_triangle_force`]), so the results are bit-identical (IEEE 754
