@@ -759,9 +759,11 @@ impl Simulation {
         };
         // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
         // velocities, else the next sweep's opening batches.
-        let close_row = |row: usize, last: bool| {
-            project_row(closing.clone(), row);
-            // SAFETY: each row goes to one part of a pass (or of the pipeline's stage).
+        // The attachments and, on the last sweep, the velocities of row `row`.
+        let end_row = |row: usize, last: bool| {
+            // SAFETY: a pass, the pipeline's stage and the wavefront each give a row's end of a sweep
+            // to one part or seam, after every strip that touches the row in that sweep, before any of
+            // the next, and after the pins its attachments read were gathered.
             unsafe {
                 end_sweep(
                     particles_of(row),
@@ -771,6 +773,10 @@ impl Simulation {
                     &previous,
                 )
             };
+        };
+        let close_row = |row: usize, last: bool| {
+            project_row(closing.clone(), row);
+            end_row(row, last);
             if !last {
                 project_row(0..opening, row);
             }
@@ -858,17 +864,7 @@ impl Simulation {
                         .iter()
                         .for_each(project_one);
                 }
-                // SAFETY: the wavefront gives each row's end of a sweep to one part or seam, after
-                // every strip that touches the row in that sweep and before any of the next.
-                WaveItem::End { last } => unsafe {
-                    end_sweep(
-                        particles_of(row),
-                        tethers.as_ref(),
-                        last.then_some((&velocities, 1.0 / h)),
-                        &positions,
-                        &previous,
-                    )
-                },
+                WaveItem::End { last } => end_row(row, last),
             };
             // Each part's own strips need nothing across a cut, so the parts run at once; the seams
             // around the cuts need both neighbours' parts done, and touch disjoint rows of their own.
