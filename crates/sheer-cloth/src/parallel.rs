@@ -452,10 +452,6 @@ impl<'a, T: Copy> DisjointSlice<'a, T> {
         }
     }
 
-    pub(crate) fn len(&self) -> usize {
-        self.len
-    }
-
     /// # Safety
     /// No other thread may write index `i` concurrently.
     #[inline]

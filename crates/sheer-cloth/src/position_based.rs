@@ -709,7 +709,7 @@ impl Simulation {
                 );
             }
         };
-        // The within-row batches `group` on row `row`.
+        // The strips of batches `group` whose last row is `row`.
         let project_row = |group: Range<usize>, row: usize| {
             for (by_row, _) in &by_last_row[group] {
                 strips[by_row[row].clone()].iter().for_each(project_one);
@@ -717,7 +717,9 @@ impl Simulation {
         };
         let particles_of = |row: usize| row * columns..(row + 1) * columns;
         let row_grain = PARTICLE_GRAIN.div_ceil(columns);
-        // The sub-step's forces (unless summed already) and prediction on row `row`.
+        // The sub-step's forces (unless summed already) and prediction on row `row`, and the gather of
+        // the row's pins' predicted positions for the attachments (no projection moves a pin: inverse
+        // mass 0).
         let predict_row = |row: usize| {
             let range = particles_of(row);
             // SAFETY: each row goes to one part of a pass; the cells around it are written by the wind
@@ -756,6 +758,13 @@ impl Simulation {
                     predict(forces.slice(range.clone()));
                 }
             };
+            if let Some(tethers) = &tethers {
+                // SAFETY: no attachment reads the row's pins meanwhile: a pass runs none, the
+                // pipeline's stage runs them only after every part has finished it
+                // (`Stage::after_all`), and the wavefront keeps them behind this item by the tethers'
+                // reach (`WaveItem::of_substep`).
+                unsafe { tethers.gather(particles_of(row), &positions) };
+            }
         };
         // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
         // velocities, else the next sweep's opening batches.
@@ -806,17 +815,8 @@ impl Simulation {
                 StageKind::Open => {
                     predict_row(row);
                     project_row(0..opening, row);
-                    if let Some(tethers) = &tethers {
-                        // SAFETY: the pins' positions are read only after every part has finished
-                        // this stage (`Stage::after_all`).
-                        unsafe { tethers.gather(particles_of(row), &positions) };
-                    }
                 }
-                StageKind::Batch(batch) => {
-                    strips[by_last_row[batch].0[row].clone()]
-                        .iter()
-                        .for_each(project_one);
-                }
+                StageKind::Batch(batch) => project_row(batch..batch + 1, row),
                 StageKind::Close { last } => close_row(row, last),
             };
             // One index per thread of the team (`team_in_equal_parts`), all at once.
@@ -826,9 +826,8 @@ impl Simulation {
             progress.rebalance(&plan.pipeline);
             return;
         }
-        // First pass (unless the wavefront does it): the forces (unless summed already) and the
-        // prediction, then, pass by pass, the opening batches, row by row. The attachments then gather the
-        // pins' predicted positions, which no projection moves (inverse mass 0).
+        // First pass (unless the wavefront does it): the forces (unless summed already), the prediction
+        // and the pins' gather, then, pass by pass, the opening batches, row by row.
         if !prediction_in_wavefront {
             parts(rows, parallel, row_grain, |rows| {
                 for row in rows {
@@ -838,10 +837,6 @@ impl Simulation {
                     }
                 }
             });
-            if let Some(tethers) = &tethers {
-                // SAFETY: no pass is running.
-                unsafe { tethers.gather(0..positions.len(), &positions) };
-            }
         }
         if let Some((plan, parts_count, items)) = wavefront {
             let run_item = |item: usize, row: usize| match items[item].0 {
@@ -851,19 +846,8 @@ impl Simulation {
                         wind_cell_row(row - 1)
                     }
                 }
-                WaveItem::Predict => {
-                    predict_row(row);
-                    if let Some(tethers) = &tethers {
-                        // SAFETY: a row's pins are read by the attachments of rows up to the tethers'
-                        // reach away, which `WaveItem::of_substep` keeps behind this item.
-                        unsafe { tethers.gather(particles_of(row), &positions) };
-                    }
-                }
-                WaveItem::Batch(batch) => {
-                    strips[by_last_row[batch].0[row].clone()]
-                        .iter()
-                        .for_each(project_one);
-                }
+                WaveItem::Predict => predict_row(row),
+                WaveItem::Batch(batch) => project_row(batch..batch + 1, row),
                 WaveItem::End { last } => end_row(row, last),
             };
             // Each part's own strips need nothing across a cut, so the parts run at once; the seams
