@@ -21,8 +21,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::DVec3;
 
+use crate::components::{DisjointXyz, XyzMut, XyzRef};
 use crate::model::{GridShape, Spring, SpringKind};
-use crate::parallel::{DisjointSlice, parts};
+use crate::parallel::parts;
 use crate::sim::may_exceed_strain;
 use crate::vectorise::by_cpu;
 
@@ -457,8 +458,8 @@ pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bo
 #[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
     strip: &Strip,
-    positions: &DisjointSlice<'_, DVec3>,
-    previous: &DisjointSlice<'_, DVec3>,
+    positions: &DisjointXyz<'_>,
+    previous: &DisjointXyz<'_>,
     inverse_masses: &[f64],
     rest_lengths: &[f64],
     inverse_denominators: &[f64],
@@ -500,24 +501,25 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
                 )
             };
             let w = &inverse_masses[first];
+            let (rest, denominators) = (rest_lengths, inverse_denominators);
             if half == 1 {
-                project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2>(
-                    x.as_chunks_mut().0,
-                    previous.as_chunks().0,
-                    w.as_chunks().0,
-                    rest_lengths.as_chunks().0,
-                    inverse_denominators.as_chunks().0,
-                    lambdas.as_chunks_mut().0,
+                project_along::<PBD, MULTIPLIERS, DAMPED, 1>(
+                    x,
+                    previous,
+                    w,
+                    rest,
+                    denominators,
+                    lambdas,
                     family,
                 );
             } else {
-                project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4>(
-                    x.as_chunks_mut().0,
-                    previous.as_chunks().0,
-                    w.as_chunks().0,
-                    rest_lengths.as_chunks().0,
-                    inverse_denominators.as_chunks().0,
-                    lambdas.as_chunks_mut().0,
+                project_along::<PBD, MULTIPLIERS, DAMPED, 2>(
+                    x,
+                    previous,
+                    w,
+                    rest,
+                    denominators,
+                    lambdas,
                     family,
                 );
             }
@@ -531,10 +533,10 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
 /// all through the loop. Same bits either way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
-    x_a: &mut [DVec3],
-    x_b: &mut [DVec3],
-    previous_a: &[DVec3],
-    previous_b: &[DVec3],
+    x_a: XyzMut<'_>,
+    x_b: XyzMut<'_>,
+    previous_a: XyzRef<'_>,
+    previous_b: XyzRef<'_>,
     w_a: &[f64],
     w_b: &[f64],
     rest_lengths: &[f64],
@@ -548,12 +550,22 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
         let whole = x_a.len() / BLOCK * BLOCK;
         let (x_a, tail_a) = x_a.split_at_mut(whole);
         let (x_b, tail_b) = x_b.split_at_mut(whole);
+        let (previous_a, previous_tail_a) = previous_a.split_at(whole);
+        let (previous_b, previous_tail_b) = previous_b.split_at(whole);
         let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
         project_apart::<PBD, MULTIPLIERS, DAMPED>(
-            x_a,
-            x_b,
-            &previous_a[..whole],
-            &previous_b[..whole],
+            x_a.x,
+            x_a.y,
+            x_a.z,
+            x_b.x,
+            x_b.y,
+            x_b.z,
+            previous_a.x,
+            previous_a.y,
+            previous_a.z,
+            previous_b.x,
+            previous_b.y,
+            previous_b.z,
             &w_a[..whole],
             &w_b[..whole],
             &rest_lengths[..whole],
@@ -566,8 +578,8 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
             project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
                 tail_a,
                 tail_b,
-                &previous_a[whole..],
-                &previous_b[whole..],
+                previous_tail_a,
+                previous_tail_b,
                 &w_a[whole..],
                 &w_b[whole..],
                 &rest_lengths[whole..],
@@ -579,10 +591,18 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
         return;
     }
     project_apart::<PBD, MULTIPLIERS, DAMPED>(
-        x_a,
-        x_b,
-        previous_a,
-        previous_b,
+        x_a.x,
+        x_a.y,
+        x_a.z,
+        x_b.x,
+        x_b.y,
+        x_b.z,
+        previous_a.x,
+        previous_a.y,
+        previous_a.z,
+        previous_b.x,
+        previous_b.y,
+        previous_b.z,
         w_a,
         w_b,
         rest_lengths,
@@ -593,13 +613,22 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
 }
 
 by_cpu! {
-    /// [`project_apart_strip`] in a loop the compiler vectorises: constraint `k` joins `x_a[k]` and
-    /// `x_b[k]`.
+    /// [`project_apart_strip`] in a loop the compiler vectorises: constraint `k` joins particle `k` of
+    /// `a` and of `b`, each given by component (separate slices, which the compiler knows do not
+    /// overlap, so the loop needs no run-time checks).
     pub(crate) fn project_apart<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
-        x_a: &mut [DVec3],
-        x_b: &mut [DVec3],
-        previous_a: &[DVec3],
-        previous_b: &[DVec3],
+        a_x: &mut [f64],
+        a_y: &mut [f64],
+        a_z: &mut [f64],
+        b_x: &mut [f64],
+        b_y: &mut [f64],
+        b_z: &mut [f64],
+        previous_a_x: &[f64],
+        previous_a_y: &[f64],
+        previous_a_z: &[f64],
+        previous_b_x: &[f64],
+        previous_b_y: &[f64],
+        previous_b_z: &[f64],
         inverse_mass_a: &[f64],
         inverse_mass_b: &[f64],
         rest_lengths: &[f64],
@@ -608,17 +637,24 @@ by_cpu! {
         family: FamilyConstants,
     ) {
         // Exact lengths: no bounds checks in the loop.
-        let n = x_a.len();
-        let (x_b, previous_a, previous_b) = (&mut x_b[..n], &previous_a[..n], &previous_b[..n]);
+        let n = a_x.len();
+        let (a_y, a_z, b_x, b_y, b_z) =
+            (&mut a_y[..n], &mut a_z[..n], &mut b_x[..n], &mut b_y[..n], &mut b_z[..n]);
+        let (previous_a_x, previous_a_y, previous_a_z) =
+            (&previous_a_x[..n], &previous_a_y[..n], &previous_a_z[..n]);
+        let (previous_b_x, previous_b_y, previous_b_z) =
+            (&previous_b_x[..n], &previous_b_y[..n], &previous_b_z[..n]);
         let (inverse_mass_a, inverse_mass_b) = (&inverse_mass_a[..n], &inverse_mass_b[..n]);
         let (rest_lengths, inverse_denominators) = (&rest_lengths[..n], &inverse_denominators[..n]);
         let lambdas = &mut lambdas[..n];
         for k in 0..n {
+            let mut a = DVec3::new(a_x[k], a_y[k], a_z[k]);
+            let mut b = DVec3::new(b_x[k], b_y[k], b_z[k]);
             project::<PBD, MULTIPLIERS, DAMPED>(
-                &mut x_a[k],
-                &mut x_b[k],
-                previous_a[k],
-                previous_b[k],
+                &mut a,
+                &mut b,
+                DVec3::new(previous_a_x[k], previous_a_y[k], previous_a_z[k]),
+                DVec3::new(previous_b_x[k], previous_b_y[k], previous_b_z[k]),
                 inverse_mass_a[k],
                 inverse_mass_b[k],
                 rest_lengths[k],
@@ -626,13 +662,15 @@ by_cpu! {
                 &mut lambdas[k],
                 family,
             );
+            (a_x[k], a_y[k], a_z[k]) = (a.x, a.y, a.z);
+            (b_x[k], b_y[k], b_z[k]) = (b.x, b.y, b.z);
         }
     }
 }
 
-/// Projects an along strip of `HALF` interleaved constraints per chunk of `CHUNK = 2·HALF` particles:
-/// constraint `m·HALF + j` joins `x[m][j]` and `x[m][j + HALF]`. With AVX-512 through
-/// [`strips_avx512`](crate::strips_avx512), eight constraints at a time; otherwise through the vectorised
+/// Projects an along strip of `HALF` interleaved constraints per chunk of `2·HALF` particles:
+/// constraint `m·HALF + j` joins particles `2·HALF·m + j` and `2·HALF·m + j + HALF`. With AVX-512
+/// through [`strips_avx512`](crate::strips_avx512), eight constraints at a time; otherwise through the
 /// loop. Same bits either way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn project_along<
@@ -640,14 +678,13 @@ pub(crate) fn project_along<
     const MULTIPLIERS: bool,
     const DAMPED: bool,
     const HALF: usize,
-    const CHUNK: usize,
 >(
-    x: &mut [[DVec3; CHUNK]],
-    previous: &[[DVec3; CHUNK]],
-    inverse_masses: &[[f64; CHUNK]],
-    rest_lengths: &[[f64; HALF]],
-    inverse_denominators: &[[f64; HALF]],
-    lambdas: &mut [[f64; HALF]],
+    x: XyzMut<'_>,
+    previous: XyzRef<'_>,
+    inverse_masses: &[f64],
+    rest_lengths: &[f64],
+    inverse_denominators: &[f64],
+    lambdas: &mut [f64],
     family: FamilyConstants,
 ) {
     #[cfg(target_arch = "x86_64")]
@@ -655,18 +692,18 @@ pub(crate) fn project_along<
         // SAFETY: the CPU has AVX-512F, checked just above.
         unsafe {
             crate::strips_avx512::project_along::<PBD, MULTIPLIERS, DAMPED, HALF>(
-                x.as_flattened_mut(),
-                previous.as_flattened(),
-                inverse_masses.as_flattened(),
-                rest_lengths.as_flattened(),
-                inverse_denominators.as_flattened(),
-                lambdas.as_flattened_mut(),
+                x,
+                previous,
+                inverse_masses,
+                rest_lengths,
+                inverse_denominators,
+                lambdas,
                 family,
             )
         };
         return;
     }
-    project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF, CHUNK>(
+    project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF>(
         x,
         previous,
         inverse_masses,
@@ -677,45 +714,56 @@ pub(crate) fn project_along<
     );
 }
 
-by_cpu! {
-    /// [`project_along`] one chunk at a time, in a loop the compiler vectorises (with gathers and
-    /// scatters: the ends of a chunk's constraints interleave).
-    pub(crate) fn project_along_loop<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool, const HALF: usize, const CHUNK: usize>(
-        x: &mut [[DVec3; CHUNK]],
-        previous: &[[DVec3; CHUNK]],
-        inverse_masses: &[[f64; CHUNK]],
-        rest_lengths: &[[f64; HALF]],
-        inverse_denominators: &[[f64; HALF]],
-        lambdas: &mut [[f64; HALF]],
-        family: FamilyConstants,
-    ) {
-        let n = x.len();
-        let (previous, inverse_masses) = (&previous[..n], &inverse_masses[..n]);
-        let (rest_lengths, inverse_denominators) = (&rest_lengths[..n], &inverse_denominators[..n]);
-        let lambdas = &mut lambdas[..n];
-        for m in 0..n {
-            let (low, high) = x[m].split_at_mut(HALF);
-            for j in 0..HALF {
-                project::<PBD, MULTIPLIERS, DAMPED>(
-                    &mut low[j],
-                    &mut high[j],
-                    previous[m][j],
-                    previous[m][j + HALF],
-                    inverse_masses[m][j],
-                    inverse_masses[m][j + HALF],
-                    rest_lengths[m][j],
-                    inverse_denominators[m][j],
-                    &mut lambdas[m][j],
-                    family,
-                );
-            }
-        }
+/// [`project_along`] one constraint at a time: the path of a CPU without AVX-512, and the reference
+/// its blocks are tested against.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project_along_loop<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+    const HALF: usize,
+>(
+    x: XyzMut<'_>,
+    previous: XyzRef<'_>,
+    inverse_masses: &[f64],
+    rest_lengths: &[f64],
+    inverse_denominators: &[f64],
+    lambdas: &mut [f64],
+    family: FamilyConstants,
+) {
+    let constraints = rest_lengths.len();
+    assert!(x.len() == 2 * constraints && previous.len() == x.len());
+    assert!(inverse_masses.len() == x.len() && inverse_denominators.len() == constraints);
+    for c in 0..constraints {
+        let a = 2 * HALF * (c / HALF) + c % HALF;
+        let b = a + HALF;
+        let mut x_a = DVec3::new(x.x[a], x.y[a], x.z[a]);
+        let mut x_b = DVec3::new(x.x[b], x.y[b], x.z[b]);
+        project::<PBD, MULTIPLIERS, DAMPED>(
+            &mut x_a,
+            &mut x_b,
+            previous.at(a),
+            previous.at(b),
+            inverse_masses[a],
+            inverse_masses[b],
+            rest_lengths[c],
+            inverse_denominators[c],
+            &mut lambdas[c],
+            family,
+        );
+        (x.x[a], x.y[a], x.z[a]) = (x_a.x, x_a.y, x_a.z);
+        (x.x[b], x.y[b], x.z[b]) = (x_b.x, x_b.y, x_b.z);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::components::Xyz;
+
+    /// [`joined_along`] of one layout.
+    type JoinedAlong =
+        fn(&mut [DVec3], &[DVec3], &[f64], &[f64], &[f64], &mut [f64], usize, FamilyConstants);
     use crate::model::{ClothModel, GridSpec};
 
     fn grid_springs(columns: usize, rows: usize) -> (GridShape, Vec<Spring>) {
@@ -823,15 +871,120 @@ mod tests {
     }
 
     /// [`project_along`]'s signature, for a test to hold it and its loop side by side.
-    type AlongProjection<const HALF: usize, const CHUNK: usize> = fn(
-        &mut [[DVec3; CHUNK]],
-        &[[DVec3; CHUNK]],
-        &[[f64; CHUNK]],
-        &[[f64; HALF]],
-        &[[f64; HALF]],
-        &mut [[f64; HALF]],
-        FamilyConstants,
-    );
+    /// [`project_apart_strip`] (`STRIP`) or the loop [`project_apart`] alone on the first `count`
+    /// constraints of joined vectors: the whole arrays split, those constraints projected, the arrays
+    /// joined back, so that a write past the strip would show in them.
+    #[allow(clippy::too_many_arguments)]
+    fn joined_apart<
+        const PBD: bool,
+        const MULTIPLIERS: bool,
+        const DAMPED: bool,
+        const STRIP: bool,
+    >(
+        a: &mut [DVec3],
+        b: &mut [DVec3],
+        previous_a: &[DVec3],
+        previous_b: &[DVec3],
+        w_a: &[f64],
+        w_b: &[f64],
+        rest: &[f64],
+        denominators: &[f64],
+        lambdas: &mut [f64],
+        count: usize,
+        family: FamilyConstants,
+    ) {
+        let (mut split_a, mut split_b) = (Xyz::of(a), Xyz::of(b));
+        let (previous_a, previous_b) = (Xyz::of(previous_a), Xyz::of(previous_b));
+        let (x_a, _) = split_a.as_mut().split_at_mut(count);
+        let (x_b, _) = split_b.as_mut().split_at_mut(count);
+        let (previous_a, previous_b) = (
+            previous_a.as_ref().range(0..count),
+            previous_b.as_ref().range(0..count),
+        );
+        let (w_a, w_b, rest, denominators) = (
+            &w_a[..count],
+            &w_b[..count],
+            &rest[..count],
+            &denominators[..count],
+        );
+        let lambdas = &mut lambdas[..count];
+        if STRIP {
+            project_apart_strip::<PBD, MULTIPLIERS, DAMPED>(
+                x_a,
+                x_b,
+                previous_a,
+                previous_b,
+                w_a,
+                w_b,
+                rest,
+                denominators,
+                lambdas,
+                family,
+            );
+        } else {
+            project_apart::<PBD, MULTIPLIERS, DAMPED>(
+                x_a.x,
+                x_a.y,
+                x_a.z,
+                x_b.x,
+                x_b.y,
+                x_b.z,
+                previous_a.x,
+                previous_a.y,
+                previous_a.z,
+                previous_b.x,
+                previous_b.y,
+                previous_b.z,
+                w_a,
+                w_b,
+                rest,
+                denominators,
+                lambdas,
+                family,
+            );
+        }
+        split_a.join_into(a);
+        split_b.join_into(b);
+    }
+
+    /// [`project_along`] (or, with `LOOP`, [`project_along_loop`]) on the first `chunks` chunks of
+    /// joined vectors, split and joined back whole as in [`joined_apart`].
+    #[allow(clippy::too_many_arguments)]
+    fn joined_along<
+        const PBD: bool,
+        const MULTIPLIERS: bool,
+        const DAMPED: bool,
+        const HALF: usize,
+        const LOOP: bool,
+    >(
+        x: &mut [DVec3],
+        previous: &[DVec3],
+        w: &[f64],
+        rest: &[f64],
+        denominators: &[f64],
+        lambdas: &mut [f64],
+        chunks: usize,
+        family: FamilyConstants,
+    ) {
+        let (particles, constraints) = (2 * HALF * chunks, HALF * chunks);
+        let (mut split, previous) = (Xyz::of(x), Xyz::of(previous));
+        let (moved, _) = split.as_mut().split_at_mut(particles);
+        let project = if LOOP {
+            project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF>
+        } else {
+            project_along::<PBD, MULTIPLIERS, DAMPED, HALF>
+        };
+        project(
+            moved,
+            previous.as_ref().range(0..particles),
+            &w[..particles],
+            &rest[..constraints],
+            &denominators[..constraints],
+            &mut lambdas[..constraints],
+            family,
+        );
+        split.join_into(x);
+    }
 
     /// The vectorised strip loops give the bits of [`project`] called one constraint at a time, for
     /// PBD, XPBD with and without multipliers, with inactive constraints and coincident ends.
@@ -897,7 +1050,7 @@ mod tests {
             }
             let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
             let (low, high) = got.split_at_mut(half);
-            project_apart::<PBD, MULTIPLIERS, DAMPED>(
+            joined_apart::<PBD, MULTIPLIERS, DAMPED, false>(
                 low,
                 high,
                 &previous[..half],
@@ -907,6 +1060,7 @@ mod tests {
                 rest,
                 denominators,
                 &mut got_lambdas,
+                half,
                 family,
             );
             assert_eq!(bits(&got), bits(&expected), "apart, PBD {PBD}");
@@ -932,22 +1086,21 @@ mod tests {
             let projections = [
                 (
                     "",
-                    project_along::<PBD, MULTIPLIERS, DAMPED, 1, 2> as AlongProjection<1, 2>,
+                    joined_along::<PBD, MULTIPLIERS, DAMPED, 1, false> as JoinedAlong,
                 ),
-                (
-                    " (loop)",
-                    project_along_loop::<PBD, MULTIPLIERS, DAMPED, 1, 2>,
-                ),
+                (" (loop)", joined_along::<PBD, MULTIPLIERS, DAMPED, 1, true>),
             ];
             for (path, project) in projections {
                 let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
+                let chunks = x.len() / 2;
                 project(
-                    got.as_chunks_mut().0,
-                    previous.as_chunks().0,
-                    w.as_chunks().0,
-                    rest.as_chunks().0,
-                    denominators.as_chunks().0,
-                    got_lambdas.as_chunks_mut().0,
+                    &mut got,
+                    previous,
+                    w,
+                    rest,
+                    denominators,
+                    &mut got_lambdas,
+                    chunks,
                     family,
                 );
                 assert_eq!(bits(&got), bits(&expected), "along pairs{path}, PBD {PBD}");
@@ -977,22 +1130,21 @@ mod tests {
             let projections = [
                 (
                     "",
-                    project_along::<PBD, MULTIPLIERS, DAMPED, 2, 4> as AlongProjection<2, 4>,
+                    joined_along::<PBD, MULTIPLIERS, DAMPED, 2, false> as JoinedAlong,
                 ),
-                (
-                    " (loop)",
-                    project_along_loop::<PBD, MULTIPLIERS, DAMPED, 2, 4>,
-                ),
+                (" (loop)", joined_along::<PBD, MULTIPLIERS, DAMPED, 2, true>),
             ];
             for (path, project) in projections {
                 let (mut got, mut got_lambdas) = (x.to_vec(), lambdas0.clone());
+                let chunks = x.len() / 4;
                 project(
-                    got.as_chunks_mut().0,
-                    previous.as_chunks().0,
-                    w.as_chunks().0,
-                    rest.as_chunks().0,
-                    denominators.as_chunks().0,
-                    got_lambdas.as_chunks_mut().0,
+                    &mut got,
+                    previous,
+                    w,
+                    rest,
+                    denominators,
+                    &mut got_lambdas,
+                    chunks,
                     family,
                 );
                 assert_eq!(bits(&got), bits(&expected), "along quads{path}, PBD {PBD}");
@@ -1102,16 +1254,17 @@ mod tests {
                         let (mut x, mut lambdas) = (x.clone(), lambdas0.clone());
                         let (a, b) = x.split_at_mut(n);
                         if strip {
-                            project_apart_strip::<$pbd, $multipliers, $damped>(
-                                &mut a[..count],
-                                &mut b[..count],
-                                &previous[..count],
-                                &previous[n..n + count],
-                                &w[..count],
-                                &w[n..n + count],
-                                &rest[..count],
-                                &denominators[..count],
-                                &mut lambdas[..count],
+                            joined_apart::<$pbd, $multipliers, $damped, true>(
+                                a,
+                                b,
+                                &previous[..n],
+                                &previous[n..],
+                                &w[..n],
+                                &w[n..],
+                                &rest,
+                                &denominators,
+                                &mut lambdas,
+                                count,
                                 family,
                             );
                         } else {
@@ -1199,17 +1352,18 @@ mod tests {
                     let run = |looped: bool| {
                         let (mut x, mut lambdas) = (x.clone(), lambdas0.clone());
                         let project = if looped {
-                            project_along_loop::<$pbd, $multipliers, $damped, $half, $chunk>
+                            joined_along::<$pbd, $multipliers, $damped, $half, true>
                         } else {
-                            project_along::<$pbd, $multipliers, $damped, $half, $chunk>
+                            joined_along::<$pbd, $multipliers, $damped, $half, false>
                         };
                         project(
-                            &mut x.as_chunks_mut().0[..chunks],
-                            &previous.as_chunks().0[..chunks],
-                            &w.as_chunks().0[..chunks],
-                            &rest.as_chunks().0[..chunks],
-                            &denominators.as_chunks().0[..chunks],
-                            &mut lambdas.as_chunks_mut().0[..chunks],
+                            &mut x,
+                            &previous,
+                            &w,
+                            &rest,
+                            &denominators,
+                            &mut lambdas,
+                            chunks,
                             family,
                         );
                         (x, lambdas)

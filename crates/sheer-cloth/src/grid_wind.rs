@@ -12,9 +12,16 @@
 //! The loop is compiled once per instruction set and picked at run time ([`by_cpu!`]). The shares are then
 //! added to the particles row by row too ([`add_grid_triangle_forces`]), each particle taking its six
 //! triangles in ascending order, as the general path's scatter does.
+//!
+//! The position-based methods keep their state split by component (`components.rs`), and have their own
+//! copies of these passes ([`split_cell_rows`], [`split_row_forces`]): the same arithmetic on each
+//! component, into shares split the same way ([`SplitShares`]), so that neither the cells nor the sums
+//! transpose 24-byte vectors with permutes (the sums had been almost nothing but permutes: 162 of 216
+//! vector operations, `perf annotate`). Tested bit for bit against the joined passes.
 
 use std::ops::Range;
 
+use crate::components::{Xyz, XyzMut, XyzRef};
 use crate::model::GridShape;
 use crate::parallel::{DisjointSlice, parts};
 use crate::params::Wind;
@@ -53,36 +60,14 @@ pub(crate) fn grid_triangle_forces(
     });
 }
 
-/// The corner shares of the triangles of cell row `row`, from `positions` and `velocities` of particle
-/// rows `row` and `row + 1` only (the slices hold those two rows), into `out` (that row's cells): one
-/// row of [`grid_triangle_forces`], for a caller that shares the rows out itself.
-pub(crate) fn cell_row(
-    columns: usize,
-    wind: &Wind,
-    air_velocity: DVec3,
-    positions: &[DVec3],
-    velocities: &[DVec3],
-    out: &mut [[DVec3; 2]],
-) {
-    cell_rows(
-        columns,
-        wind,
-        air_velocity,
-        positions,
-        velocities,
-        0..1,
-        out,
-    );
-}
-
 /// The cells above and below particle row `row` of a grid of `rows` particle rows (those that exist):
 /// cell rows `row − 1` and `row`, each as `cell_row` gives it (two shares per cell, indexed like
 /// [`GridShape::triangles`]).
-pub(crate) fn cells_around<'a>(
+pub(crate) fn cells_around<T>(
     rows: usize,
     row: usize,
-    cell_row: impl Fn(usize) -> &'a [[DVec3; 2]],
-) -> [Option<&'a [[DVec3; 2]]>; 2] {
+    cell_row: impl Fn(usize) -> T,
+) -> [Option<T>; 2] {
     [
         row.checked_sub(1).map(&cell_row),
         (row + 1 < rows).then(|| cell_row(row)),
@@ -333,9 +318,283 @@ by_cpu! {
     }
 }
 
+/// The corner shares of a grid's cells split by component, for the position-based methods, whose state
+/// is split the same way (`components.rs`): `[first, second]`, the first and the second triangle of
+/// every cell ([`GridShape::triangles`]), indexed by cell. A particle's six triangles are then at the
+/// same index or one before it in four arrays (see [`add_at_particle`]), so their sums read contiguous
+/// memory with no permutes.
+pub(crate) type SplitShares = [Xyz; 2];
+
+/// [`grid_triangle_forces`] on the split state, into split shares.
+pub(crate) fn split_grid_triangle_forces(
+    shape: GridShape,
+    wind: &Wind,
+    air_velocity: DVec3,
+    positions: XyzRef<'_>,
+    velocities: XyzRef<'_>,
+    shares: &mut SplitShares,
+    parallel: bool,
+) {
+    let cells_per_row = shape.columns - 1;
+    assert_eq!(shares[0].len(), cells_per_row * (shape.rows - 1));
+    assert_eq!(shares[1].len(), shares[0].len());
+    let [first, second] = shares.each_mut().map(|s| s.disjoint());
+    // Eight rows of cells per rayon task: enough work to cover rayon's hand-off.
+    parts(shape.rows - 1, parallel, 8, |rows| {
+        let cells = rows.start * cells_per_row..rows.end * cells_per_row;
+        // SAFETY: the parts of the rows are disjoint, so are their cells.
+        let (first, second) = unsafe { (first.slice_mut(cells.clone()), second.slice_mut(cells)) };
+        split_cell_rows(
+            shape.columns,
+            wind,
+            air_velocity,
+            positions,
+            velocities,
+            rows,
+            first,
+            second,
+        );
+    });
+}
+
+/// [`cell_row`] on the split state: the shares of cell row `row` from the two particle rows it joins
+/// (`positions` and `velocities` hold those two rows), into that row's cells of `first` and `second`.
+pub(crate) fn split_cell_row(
+    columns: usize,
+    wind: &Wind,
+    air_velocity: DVec3,
+    positions: XyzRef<'_>,
+    velocities: XyzRef<'_>,
+    first: XyzMut<'_>,
+    second: XyzMut<'_>,
+) {
+    split_cell_rows(
+        columns,
+        wind,
+        air_velocity,
+        positions,
+        velocities,
+        0..1,
+        first,
+        second,
+    );
+}
+
+by_cpu! {
+    /// [`cell_rows`] on the split state: the shares of the cells in `rows`, into `first` and `second`
+    /// (those rows' cells), in blocks of eight cells as there, each component read and written with plain
+    /// vector loads and stores.
+    fn split_cell_rows(
+        columns: usize,
+        wind: &Wind,
+        air_velocity: DVec3,
+        positions: XyzRef<'_>,
+        velocities: XyzRef<'_>,
+        rows: Range<usize>,
+        first: XyzMut<'_>,
+        second: XyzMut<'_>,
+    ) {
+        let cells = columns - 1;
+        let XyzMut { x: first_x, y: first_y, z: first_z } = first;
+        let XyzMut { x: second_x, y: second_y, z: second_z } = second;
+        for (r, row) in rows.enumerate() {
+            let top = row * columns;
+            let bottom = top + columns;
+            let (top_x, bottom_x) = (
+                positions.range(top..top + columns),
+                positions.range(bottom..bottom + columns),
+            );
+            let (top_v, bottom_v) = (
+                velocities.range(top..top + columns),
+                velocities.range(bottom..bottom + columns),
+            );
+            let out = r * cells;
+            if cells < CELL_BLOCK {
+                for left in 0..cells {
+                    let [a, b] = cell(
+                        wind,
+                        air_velocity,
+                        [top_x.at(left), top_x.at(left + 1)],
+                        [bottom_x.at(left), bottom_x.at(left + 1)],
+                        [top_v.at(left), top_v.at(left + 1)],
+                        [bottom_v.at(left), bottom_v.at(left + 1)],
+                    );
+                    let i = out + left;
+                    (first_x[i], first_y[i], first_z[i]) = (a.x, a.y, a.z);
+                    (second_x[i], second_y[i], second_z[i]) = (b.x, b.y, b.z);
+                }
+                continue;
+            }
+            // As in `cell_rows`: whole blocks, the last overlapping the one before it.
+            let starts = (0..cells - CELL_BLOCK)
+                .step_by(CELL_BLOCK)
+                .chain([cells - CELL_BLOCK]);
+            for start in starts {
+                let corners = |v: XyzRef<'_>| -> [[f64; CELL_BLOCK + 1]; 3] {
+                    let end = start + CELL_BLOCK + 1;
+                    [
+                        v.x[start..end].try_into().unwrap(),
+                        v.y[start..end].try_into().unwrap(),
+                        v.z[start..end].try_into().unwrap(),
+                    ]
+                };
+                let (tx, bx, tv, bv) = (
+                    corners(top_x),
+                    corners(bottom_x),
+                    corners(top_v),
+                    corners(bottom_v),
+                );
+                let [first, second] = split_cell_block(wind, air_velocity, tx, bx, tv, bv);
+                let o = out + start..out + start + CELL_BLOCK;
+                first_x[o.clone()].copy_from_slice(&first[0]);
+                first_y[o.clone()].copy_from_slice(&first[1]);
+                first_z[o.clone()].copy_from_slice(&first[2]);
+                second_x[o.clone()].copy_from_slice(&second[0]);
+                second_y[o.clone()].copy_from_slice(&second[1]);
+                second_z[o].copy_from_slice(&second[2]);
+            }
+        }
+    }
+}
+
+/// The shares of a block of cells from its corners' components (`[x, y, z]` of the top and bottom
+/// rows' positions and velocities, one more than the cells): `[first, second]` triangles' `[x, y, z]`.
+/// On arrays of its own, so that the compiler vectorises it across the block.
+#[inline(always)]
+fn split_cell_block(
+    wind: &Wind,
+    air_velocity: DVec3,
+    top_x: [[f64; CELL_BLOCK + 1]; 3],
+    bottom_x: [[f64; CELL_BLOCK + 1]; 3],
+    top_v: [[f64; CELL_BLOCK + 1]; 3],
+    bottom_v: [[f64; CELL_BLOCK + 1]; 3],
+) -> [[[f64; CELL_BLOCK]; 3]; 2] {
+    let at = |c: &[[f64; CELL_BLOCK + 1]; 3], k: usize| DVec3::new(c[0][k], c[1][k], c[2][k]);
+    let mut shares = [[[0.0; CELL_BLOCK]; 3]; 2];
+    // An index loop: the corners are indexed around `k`, as in `cell_rows`.
+    #[allow(clippy::needless_range_loop)]
+    for k in 0..CELL_BLOCK {
+        let [a, b] = cell(
+            wind,
+            air_velocity,
+            [at(&top_x, k), at(&top_x, k + 1)],
+            [at(&bottom_x, k), at(&bottom_x, k + 1)],
+            [at(&top_v, k), at(&top_v, k + 1)],
+            [at(&bottom_v, k), at(&bottom_v, k + 1)],
+        );
+        for c in 0..3 {
+            shares[0][c][k] = a[c];
+            shares[1][c][k] = b[c];
+        }
+    }
+    shares
+}
+
+/// [`row_forces`] on the split state: the body force of the row, plus, with `cells`, the split shares
+/// (`[first, second]` of the cell rows above and below, [`cells_around`]) in ascending triangle order,
+/// into `forces`. Component by component: each component's sum is the same sequence of additions as the
+/// joined sum's, so the same bits.
+pub(crate) fn split_row_forces(
+    cells: Option<[Option<[XyzRef<'_>; 2]>; 2]>,
+    masses: &[f64],
+    velocities: XyzRef<'_>,
+    gravity: DVec3,
+    air_damping: f64,
+    forces: XyzMut<'_>,
+) {
+    let XyzMut { x, y, z } = forces;
+    fn component<'a>(shares: Option<[XyzRef<'a>; 2]>, c: usize) -> Option<[&'a [f64]; 2]> {
+        shares.map(|pair| pair.map(|s| [s.x, s.y, s.z][c]))
+    }
+    let velocity = [velocities.x, velocities.y, velocities.z];
+    let gravity = gravity.to_array();
+    for (c, forces) in [x, y, z].into_iter().enumerate() {
+        body_force_component(masses, velocity[c], gravity[c], air_damping, forces);
+        if let Some([above, below]) = cells {
+            let ([above_first, above_second], [below_first, below_second]) = (
+                component(above, c).map_or([None; 2], |pair| pair.map(Some)),
+                component(below, c).map_or([None; 2], |pair| pair.map(Some)),
+            );
+            add_shares_component(above_first, above_second, below_first, below_second, forces);
+        }
+    }
+}
+
+by_cpu! {
+    /// One component of [`body_force_row`]: `forces[i] = m_i (g − c v_i)`.
+    fn body_force_component(
+        masses: &[f64],
+        velocities: &[f64],
+        gravity: f64,
+        air_damping: f64,
+        forces: &mut [f64],
+    ) {
+        let n = forces.len();
+        let (masses, velocities) = (&masses[..n], &velocities[..n]);
+        for i in 0..n {
+            forces[i] = masses[i] * (gravity - air_damping * velocities[i]);
+        }
+    }
+}
+
+/// One component of [`add_at_particle`]: `[first, second]` shares of the cell rows above and below.
+#[inline(always)]
+fn add_component_at_particle(
+    force: &mut f64,
+    column: usize,
+    [above_first, above_second]: [Option<&[f64]>; 2],
+    [below_first, below_second]: [Option<&[f64]>; 2],
+    has_left: bool,
+    has_right: bool,
+) {
+    if let (Some(first), Some(second)) = (above_first, above_second) {
+        if has_left {
+            *force += first[column - 1];
+            *force += second[column - 1];
+        }
+        if has_right {
+            *force += first[column];
+        }
+    }
+    if let (Some(first), Some(second)) = (below_first, below_second) {
+        if has_left {
+            *force += second[column - 1];
+        }
+        if has_right {
+            *force += first[column];
+            *force += second[column];
+        }
+    }
+}
+
+by_cpu! {
+    /// One component of [`add_to_particle_row`], the end particles apart; each cell row's shares as
+    /// two separate slices (which the compiler knows do not overlap `forces`), `None` where there is no
+    /// such row.
+    fn add_shares_component(
+        above_first: Option<&[f64]>,
+        above_second: Option<&[f64]>,
+        below_first: Option<&[f64]>,
+        below_second: Option<&[f64]>,
+        forces: &mut [f64],
+    ) {
+        let last = forces.len() - 1;
+        // Rows of `last` cells: with that length known, the interior loop needs no bounds checks.
+        let above = [above_first.map(|s| &s[..last]), above_second.map(|s| &s[..last])];
+        let below = [below_first.map(|s| &s[..last]), below_second.map(|s| &s[..last])];
+        add_component_at_particle(&mut forces[0], 0, above, below, false, true);
+        #[allow(clippy::needless_range_loop)]
+        for column in 1..last {
+            add_component_at_particle(&mut forces[column], column, above, below, true, true);
+        }
+        add_component_at_particle(&mut forces[last], last, above, below, true, false);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::components::Xyz;
 
     /// The row-wise pass (in whichever instruction set this CPU runs it) gives the same bits as the
     /// general per-triangle path, including degenerate triangles and triangles at rest in the air.
@@ -397,6 +656,78 @@ mod tests {
             !degenerate_cases || expected.contains(&DVec3::ZERO),
             "a degenerate case is covered"
         );
+        // The split path, into split shares, and the split row forces against the joined ones.
+        let (split_x, split_v) = (Xyz::of(&positions), Xyz::of(&velocities));
+        let cell_count = triangles.len() / 2;
+        for parallel in [false, true] {
+            let mut shares = [
+                Xyz::of(&vec![DVec3::NAN; cell_count]),
+                Xyz::of(&vec![DVec3::NAN; cell_count]),
+            ];
+            split_grid_triangle_forces(
+                shape,
+                &wind,
+                air,
+                split_x.as_ref(),
+                split_v.as_ref(),
+                &mut shares,
+                parallel,
+            );
+            let [first, second] = shares.each_ref().map(Xyz::to_vec3s);
+            for (t, want) in expected.iter().enumerate() {
+                let got = [first[t / 2], second[t / 2]][t % 2];
+                assert_eq!(
+                    got.to_array().map(f64::to_bits),
+                    want.to_array().map(f64::to_bits),
+                    "triangle {t}, split, parallel {parallel}"
+                );
+            }
+            let joined_cells: Vec<[DVec3; 2]> =
+                first.iter().zip(&second).map(|(&a, &b)| [a, b]).collect();
+            let cells_per_row = shape.columns - 1;
+            let masses: Vec<f64> = (0..n).map(|i| 1e-4 * (1.0 + jitter(i, 7))).collect();
+            let gravity = DVec3::new(0.1, -9.81, 0.2);
+            for row in 0..shape.rows {
+                let particles = row * shape.columns..(row + 1) * shape.columns;
+                let joined_row =
+                    |r: usize| &joined_cells[r * cells_per_row..(r + 1) * cells_per_row];
+                let split_row = |r: usize| {
+                    shares
+                        .each_ref()
+                        .map(|s| s.as_ref().range(r * cells_per_row..(r + 1) * cells_per_row))
+                };
+                for with_cells in [false, true] {
+                    let mut want = vec![DVec3::NAN; shape.columns];
+                    row_forces(
+                        with_cells.then(|| cells_around(shape.rows, row, joined_row)),
+                        &masses[particles.clone()],
+                        &velocities[particles.clone()],
+                        gravity,
+                        0.3,
+                        &mut want,
+                    );
+                    let mut got = Xyz::zeros(shape.columns);
+                    split_row_forces(
+                        with_cells.then(|| cells_around(shape.rows, row, split_row)),
+                        &masses[particles.clone()],
+                        split_v.as_ref().range(particles.clone()),
+                        gravity,
+                        0.3,
+                        got.as_mut(),
+                    );
+                    assert_eq!(
+                        got.to_vec3s()
+                            .iter()
+                            .map(|f| f.to_array().map(f64::to_bits))
+                            .collect::<Vec<_>>(),
+                        want.iter()
+                            .map(|f| f.to_array().map(f64::to_bits))
+                            .collect::<Vec<_>>(),
+                        "row {row}, cells {with_cells}"
+                    );
+                }
+            }
+        }
         for parallel in [false, true] {
             let mut out = vec![DVec3::NAN; triangles.len()];
             grid_triangle_forces(

@@ -22,6 +22,7 @@
 //!
 //! Units: metres, kilograms, seconds, newtons. Results are bit-identical whatever rayon's thread count.
 
+mod components;
 mod error;
 mod grid_constraints;
 mod grid_wind;

@@ -161,6 +161,14 @@ impl Method {
         }
     }
 
+    /// Whether the method is position-based (PBD, XPBD, small-steps XPBD).
+    pub fn is_position_based(&self) -> bool {
+        matches!(
+            self,
+            Method::Pbd { .. } | Method::Xpbd { .. } | Method::SmallStepsXpbd { .. }
+        )
+    }
+
     /// Constraint-solver iterations per sub-step (1 for the force-based integrators).
     pub fn iterations(&self) -> u32 {
         match *self {

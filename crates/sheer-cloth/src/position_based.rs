@@ -12,15 +12,19 @@
 //! of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in equal parts (a cloth
 //! below 16 384 particles), a grid's whole sub-step is one hand-off, each thread on its own rows
 //! ([`Pipeline`]).
+//!
+//! Throughout a step the state is split by component (`Simulation::split_positions`, …;
+//! `components.rs`): every loop here reads and writes x, y and z as three plain arrays.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use std::ops::Range;
 
+use crate::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
 use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strip};
 use crate::grid_wind::{
-    cell_row, cells_around, grid_triangle_forces, row_forces as grid_row_forces,
+    cells_around, split_cell_row, split_grid_triangle_forces, split_row_forces,
 };
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts};
@@ -59,7 +63,7 @@ const WAVEFRONT_ROWS_PER_DEPTH: usize = 10;
 
 thread_local! {
     /// One row of a grid's forces (N), summed and used by the prediction of that row on this thread.
-    static ROW_FORCES: std::cell::RefCell<Vec<DVec3>> = const { std::cell::RefCell::new(Vec::new()) };
+    static ROW_FORCES: std::cell::RefCell<Xyz> = std::cell::RefCell::new(Xyz::default());
 }
 
 /// Particles per rayon task in the per-particle passes.
@@ -80,6 +84,8 @@ impl Simulation {
         let row_forces = if on_grid {
             self.prepare_row_forces(t)
         } else {
+            // The forces read the joined state.
+            self.join_split_state();
             self.compute_forces(t, false);
             None
         };
@@ -87,18 +93,20 @@ impl Simulation {
         if !on_grid {
             // A grid predicts row by row inside its constraint passes (`project_grid_constraints`).
             let Simulation {
-                positions,
-                velocities,
+                split_positions,
+                split_velocities,
                 previous_positions,
                 forces,
+                split_forces,
                 inverse_masses,
                 ..
             } = self;
-            let (inverse_masses, forces) = (&inverse_masses[..], &forces[..]);
+            split_forces.split_from(forces);
+            let (inverse_masses, forces) = (&inverse_masses[..], split_forces.as_ref());
             let (positions, velocities, previous_positions) = (
-                DisjointSlice::new(positions),
-                DisjointSlice::new(velocities),
-                DisjointSlice::new(previous_positions),
+                split_positions.disjoint(),
+                split_velocities.disjoint(),
+                previous_positions.disjoint(),
             );
             parts(inverse_masses.len(), parallel, PARTICLE_GRAIN, |range| {
                 // SAFETY: the parts are disjoint.
@@ -106,7 +114,7 @@ impl Simulation {
                     predict_positions(
                         h,
                         &inverse_masses[range.clone()],
-                        &forces[range.clone()],
+                        forces.range(range.clone()),
                         positions.slice_mut(range.clone()),
                         velocities.slice_mut(range.clone()),
                         previous_positions.slice_mut(range),
@@ -214,40 +222,109 @@ impl Simulation {
     }
 }
 
+/// Symplectic Euler prediction over sub-step `h` (s): `v += h w f`, then `x += h v`, keeping the start
+/// positions in `previous` (Macklin et al. 2016, Algorithm 1, lines 3–4).
+fn predict_positions(
+    h: f64,
+    inverse_masses: &[f64],
+    forces: XyzRef<'_>,
+    positions: XyzMut<'_>,
+    velocities: XyzMut<'_>,
+    previous: XyzMut<'_>,
+) {
+    previous.x.copy_from_slice(positions.x);
+    previous.y.copy_from_slice(positions.y);
+    previous.z.copy_from_slice(positions.z);
+    predict_components(
+        h,
+        inverse_masses,
+        forces.x,
+        forces.y,
+        forces.z,
+        positions.x,
+        positions.y,
+        positions.z,
+        velocities.x,
+        velocities.y,
+        velocities.z,
+    );
+}
+
 by_cpu! {
-    /// Symplectic Euler prediction over sub-step `h` (s): `v += h w f`, then `x += h v`, keeping the start
-    /// positions in `previous` (Macklin et al. 2016, Algorithm 1, lines 3–4).
-    fn predict_positions(
+    /// The loop of [`predict_positions`], the components as separate slices (which the compiler knows
+    /// do not overlap).
+    fn predict_components(
         h: f64,
         inverse_masses: &[f64],
-        forces: &[DVec3],
-        positions: &mut [DVec3],
-        velocities: &mut [DVec3],
-        previous: &mut [DVec3],
+        f_x: &[f64],
+        f_y: &[f64],
+        f_z: &[f64],
+        x_x: &mut [f64],
+        x_y: &mut [f64],
+        x_z: &mut [f64],
+        v_x: &mut [f64],
+        v_y: &mut [f64],
+        v_z: &mut [f64],
     ) {
-        previous.copy_from_slice(positions);
-        for ((x, v), (&w, &f)) in positions
-            .iter_mut()
-            .zip(velocities.iter_mut())
-            .zip(inverse_masses.iter().zip(forces))
-        {
-            *v += h * w * f;
-            *x += h * *v;
+        let n = inverse_masses.len();
+        let (f_x, f_y, f_z) = (&f_x[..n], &f_y[..n], &f_z[..n]);
+        let (x_x, x_y, x_z) = (&mut x_x[..n], &mut x_y[..n], &mut x_z[..n]);
+        let (v_x, v_y, v_z) = (&mut v_x[..n], &mut v_y[..n], &mut v_z[..n]);
+        for i in 0..n {
+            let mut v = DVec3::new(v_x[i], v_y[i], v_z[i]);
+            v += h * inverse_masses[i] * DVec3::new(f_x[i], f_y[i], f_z[i]);
+            let x = DVec3::new(x_x[i], x_y[i], x_z[i]) + h * v;
+            (v_x[i], v_y[i], v_z[i]) = (v.x, v.y, v.z);
+            (x_x[i], x_y[i], x_z[i]) = (x.x, x.y, x.z);
         }
     }
 }
 
+/// Velocities from the position change over the sub-step, `v = (x − x_previous)/h` (Macklin et al.
+/// 2016, Algorithm 1, line 16), with `inverse_h = 1/h` in 1/s.
+fn velocities_from_positions(
+    inverse_h: f64,
+    positions: XyzRef<'_>,
+    previous: XyzRef<'_>,
+    velocities: XyzMut<'_>,
+) {
+    velocity_components(
+        inverse_h,
+        positions.x,
+        positions.y,
+        positions.z,
+        previous.x,
+        previous.y,
+        previous.z,
+        velocities.x,
+        velocities.y,
+        velocities.z,
+    );
+}
+
 by_cpu! {
-    /// Velocities from the position change over the sub-step, `v = (x − x_previous)/h` (Macklin et al.
-    /// 2016, Algorithm 1, line 16), with `inverse_h = 1/h` in 1/s.
-    fn velocities_from_positions(
+    /// The loop of [`velocities_from_positions`], the components as separate slices.
+    fn velocity_components(
         inverse_h: f64,
-        positions: &[DVec3],
-        previous: &[DVec3],
-        velocities: &mut [DVec3],
+        x_x: &[f64],
+        x_y: &[f64],
+        x_z: &[f64],
+        previous_x: &[f64],
+        previous_y: &[f64],
+        previous_z: &[f64],
+        v_x: &mut [f64],
+        v_y: &mut [f64],
+        v_z: &mut [f64],
     ) {
-        for (v, (&x, &start)) in velocities.iter_mut().zip(positions.iter().zip(previous)) {
-            *v = (x - start) * inverse_h;
+        let n = v_x.len();
+        let (x_x, x_y, x_z) = (&x_x[..n], &x_y[..n], &x_z[..n]);
+        let (previous_x, previous_y, previous_z) = (&previous_x[..n], &previous_y[..n], &previous_z[..n]);
+        let (v_y, v_z) = (&mut v_y[..n], &mut v_z[..n]);
+        for i in 0..n {
+            let x = DVec3::new(x_x[i], x_y[i], x_z[i]);
+            let start = DVec3::new(previous_x[i], previous_y[i], previous_z[i]);
+            let v = (x - start) * inverse_h;
+            (v_x[i], v_y[i], v_z[i]) = (v.x, v.y, v.z);
         }
     }
 }
@@ -266,8 +343,7 @@ const ANCHOR_CHUNK: usize = 1024;
 
 thread_local! {
     /// The anchors' positions (m) of the particles [`Tethers::apply`] is pulling on this thread.
-    static ANCHOR_POSITIONS: std::cell::RefCell<Vec<DVec3>> =
-        const { std::cell::RefCell::new(Vec::new()) };
+    static ANCHOR_POSITIONS: std::cell::RefCell<Xyz> = std::cell::RefCell::new(Xyz::default());
 }
 
 impl<'a> Tethers<'a> {
@@ -304,7 +380,7 @@ impl<'a> Tethers<'a> {
     /// # Safety
     /// No other thread may write those particles of `positions`, or read or write those pins' gathered
     /// positions, while this runs.
-    unsafe fn gather(&self, particles: Range<usize>, positions: &DisjointSlice<'_, DVec3>) {
+    unsafe fn gather(&self, particles: Range<usize>, positions: &DisjointXyz<'_>) {
         for k in self.pins_among(particles) {
             // SAFETY: by the caller's contract.
             unsafe {
@@ -319,23 +395,33 @@ impl<'a> Tethers<'a> {
     /// # Safety
     /// No other thread may touch `range` of `positions`, or write the gathered positions of the pins
     /// that `range`'s particles are anchored to, while this runs.
-    unsafe fn apply(&self, range: Range<usize>, positions: &DisjointSlice<'_, DVec3>) {
-        // SAFETY: exclusive by the caller's contract.
-        let x = unsafe { positions.slice_mut(range.clone()) };
+    unsafe fn apply(&self, range: Range<usize>, positions: &DisjointXyz<'_>) {
         // Each particle's anchor is copied next to it first: the attachment loop then reads contiguous
         // memory and vectorises (a gather inside it kept the compiler from it). The copies go to this
         // thread's scratch, a chunk at a time so that it stays small and in the cache (a cloth-sized
         // array went to memory and back).
         ANCHOR_POSITIONS.with_borrow_mut(|anchors| {
-            let starts = range.clone().step_by(ANCHOR_CHUNK);
-            for (start, x) in starts.zip(x.chunks_mut(ANCHOR_CHUNK)) {
-                let chunk = start..start + x.len();
-                anchors.clear();
-                anchors.extend(self.anchors[chunk.clone()].iter().map(|&k| {
+            for start in range.clone().step_by(ANCHOR_CHUNK) {
+                let chunk = start..range.end.min(start + ANCHOR_CHUNK);
+                let count = chunk.len();
+                if anchors.len() < count {
+                    *anchors = Xyz::zeros(ANCHOR_CHUNK);
+                }
+                for (i, &k) in self.anchors[chunk.clone()].iter().enumerate() {
                     // SAFETY: by the caller's contract, no one writes these pins' positions now.
-                    unsafe { self.pin_positions.get(k as usize) }
-                }));
-                apply_tethers(x, anchors, &self.lengths[chunk]);
+                    anchors.set(i, unsafe { self.pin_positions.get(k as usize) });
+                }
+                // SAFETY: exclusive by the caller's contract.
+                let x = unsafe { positions.slice_mut(chunk.clone()) };
+                apply_tethers(
+                    x.x,
+                    x.y,
+                    x.z,
+                    &anchors.x[..count],
+                    &anchors.y[..count],
+                    &anchors.z[..count],
+                    &self.lengths[chunk],
+                );
             }
         });
     }
@@ -350,9 +436,9 @@ impl<'a> Tethers<'a> {
 unsafe fn end_sweep(
     range: Range<usize>,
     tethers: Option<&Tethers<'_>>,
-    velocities: Option<(&DisjointSlice<'_, DVec3>, f64)>,
-    positions: &DisjointSlice<'_, DVec3>,
-    previous: &DisjointSlice<'_, DVec3>,
+    velocities: Option<(&DisjointXyz<'_>, f64)>,
+    positions: &DisjointXyz<'_>,
+    previous: &DisjointXyz<'_>,
 ) {
     // SAFETY (both blocks): by the caller's contract.
     if let Some(tethers) = tethers {
@@ -400,8 +486,8 @@ impl Simulation {
     ) {
         let parallel = self.parallel();
         let Simulation {
-            positions,
-            velocities,
+            split_positions: positions,
+            split_velocities: velocities,
             previous_positions,
             colours,
             uncoloured,
@@ -427,10 +513,10 @@ impl Simulation {
             tether_lengths,
             tether_pin_positions,
         );
-        let previous = DisjointSlice::new(previous_positions);
+        let previous = previous_positions.disjoint();
         // SAFETY: no pass writes the start positions.
         let start = unsafe { previous.slice(0..particle_count) };
-        let positions = DisjointSlice::new(positions);
+        let positions = positions.disjoint();
         if let Some(tethers) = &tethers {
             // SAFETY: no pass is running.
             unsafe { tethers.gather(0..particle_count, &positions) };
@@ -449,8 +535,8 @@ impl Simulation {
                 project::<PBD, MULTIPLIERS, true>(
                     &mut x_a,
                     &mut x_b,
-                    start[a],
-                    start[b],
+                    start.at(a),
+                    start.at(b),
                     inverse_masses[a],
                     inverse_masses[b],
                     k.rest_length,
@@ -465,7 +551,7 @@ impl Simulation {
                 }
             }
         };
-        let velocities = DisjointSlice::new(velocities);
+        let velocities = velocities.disjoint();
         for iteration in 0..iterations {
             for range in colours.iter() {
                 if parallel && range.len() >= MIN_PARALLEL_BATCH {
@@ -513,8 +599,8 @@ impl Simulation {
     ) {
         let parallel = self.parallel();
         let Simulation {
-            positions,
-            velocities,
+            split_positions: positions,
+            split_velocities: velocities,
             previous_positions,
             forces,
             tether_anchors,
@@ -525,7 +611,7 @@ impl Simulation {
             params,
             inverse_masses,
             masses,
-            triangle_forces,
+            split_shares,
             grid: Some(shape),
             grid_constraints: Some(grid),
             grid_sweep,
@@ -587,7 +673,9 @@ impl Simulation {
                 GridSweep::Wavefront { parts } => parts,
                 // Once the cloth outgrows the caches (and, below, with threads only when the seams,
                 // which run on one thread each, are a small share of the rows).
-                GridSweep::Auto if positions.len() < WAVEFRONT_MIN_PARTICLES => break 'plan None,
+                GridSweep::Auto if inverse_masses.len() < WAVEFRONT_MIN_PARTICLES => {
+                    break 'plan None;
+                }
                 GridSweep::Auto => threads,
             };
             let items = WaveItem::of_substep(
@@ -653,24 +741,25 @@ impl Simulation {
             && !prediction_in_wavefront
             && let Some((wind, air_velocity)) = renew
         {
-            grid_triangle_forces(
+            split_grid_triangle_forces(
                 shape,
                 &wind,
                 air_velocity,
-                positions,
-                velocities,
-                triangle_forces,
+                positions.as_ref(),
+                velocities.as_ref(),
+                split_shares,
                 parallel,
             );
         }
         let shares_on = row_forces.is_some_and(|r| r.shares);
+        let row_forces_on = row_forces.is_some();
         let cells_per_row = columns - 1;
-        let cells = DisjointSlice::new(triangle_forces.as_chunks_mut::<2>().0);
+        let [first_cells, second_cells] = split_shares.each_mut().map(|s| s.disjoint());
         let forces = DisjointSlice::new(forces);
         let lambdas = DisjointSlice::new(lambdas);
-        let positions = DisjointSlice::new(positions);
-        let previous = DisjointSlice::new(previous_positions);
-        let velocities = DisjointSlice::new(velocities);
+        let positions = positions.disjoint();
+        let previous = previous_positions.disjoint();
+        let velocities = velocities.disjoint();
         let tethers = Tethers::of_substep(
             params,
             pinned_indices,
@@ -726,7 +815,7 @@ impl Simulation {
             // before (a pass before, the pipeline's stage before on any part, or the wavefront's wind
             // item, a row ahead).
             unsafe {
-                let predict = |forces: &[DVec3]| {
+                let predict = |forces: XyzRef<'_>| {
                     predict_positions(
                         h,
                         &inverse_masses[range.clone()],
@@ -736,27 +825,31 @@ impl Simulation {
                         previous.slice_mut(range.clone()),
                     )
                 };
-                if row_forces.is_some() {
-                    // Summed into this thread's row of scratch, which stays in its cache, rather than
-                    // into `forces`: on a large cloth that array's writes and reads went to memory.
-                    ROW_FORCES.with_borrow_mut(|row_forces| {
-                        row_forces.resize(columns, DVec3::ZERO);
-                        let cell_row =
-                            |r: usize| cells.slice(r * cells_per_row..(r + 1) * cells_per_row);
+                // Summed (or copied) into this thread's row of scratch, which stays in its cache, rather
+                // than into `forces`: on a large cloth that array's writes and reads went to memory.
+                ROW_FORCES.with_borrow_mut(|row_forces| {
+                    if row_forces.len() != columns {
+                        *row_forces = Xyz::zeros(columns);
+                    }
+                    if row_forces_on {
+                        let cell_row = |r: usize| {
+                            let cells = r * cells_per_row..(r + 1) * cells_per_row;
+                            [first_cells.slice(cells.clone()), second_cells.slice(cells)]
+                        };
                         let around = shares_on.then(|| cells_around(rows, row, cell_row));
-                        grid_row_forces(
+                        split_row_forces(
                             around,
                             &masses[range.clone()],
                             velocities.slice(range.clone()),
                             gravity,
                             air_damping,
-                            row_forces,
+                            row_forces.as_mut(),
                         );
-                        predict(row_forces);
-                    });
-                } else {
-                    predict(forces.slice(range.clone()));
-                }
+                    } else {
+                        row_forces.split_from(forces.slice(range.clone()));
+                    }
+                    predict(row_forces.as_ref());
+                });
             };
             if let Some(tethers) = &tethers {
                 // SAFETY: no attachment reads the row's pins meanwhile: a pass runs none, the
@@ -797,13 +890,15 @@ impl Simulation {
             // SAFETY: the pipeline and the wavefront run cell row `row` on one part, while no part
             // writes particle rows `row` and `row + 1` or reads the cell row.
             unsafe {
-                cell_row(
+                let cells = row * cells_per_row..(row + 1) * cells_per_row;
+                split_cell_row(
                     columns,
                     &wind,
                     air_velocity,
                     positions.slice(rows_of_cell.clone()),
                     velocities.slice(rows_of_cell),
-                    cells.slice_mut(row * cells_per_row..(row + 1) * cells_per_row),
+                    first_cells.slice_mut(cells.clone()),
+                    second_cells.slice_mut(cells),
                 )
             };
         };
@@ -1043,21 +1138,33 @@ impl PipelineStages {
 }
 
 by_cpu! {
-    /// Long-range attachments (Kim, Chentanez & Müller 2012, "Long Range Attachments"): particle `i` is
-    /// pulled back onto the sphere of radius `lengths[i]` (m) around `anchors[i]` when it lies outside
-    /// it, and left alone otherwise.
-    fn apply_tethers(positions: &mut [DVec3], anchors: &[DVec3], lengths: &[f64]) {
-        let n = positions.len();
-        let (anchors, lengths) = (&anchors[..n], &lengths[..n]);
+    /// Long-range attachments (Kim, Chentanez & Müller 2012, "Long Range Attachments"): particle `i`
+    /// (`x_x[i]`, `x_y[i]`, `x_z[i]`) is pulled back onto the sphere of radius `lengths[i]` (m) around
+    /// its anchor (`anchor_x[i]`, …) when it lies outside it, and left alone otherwise.
+    fn apply_tethers(
+        x_x: &mut [f64],
+        x_y: &mut [f64],
+        x_z: &mut [f64],
+        anchor_x: &[f64],
+        anchor_y: &[f64],
+        anchor_z: &[f64],
+        lengths: &[f64],
+    ) {
+        let n = lengths.len();
+        let (x_x, x_y, x_z) = (&mut x_x[..n], &mut x_y[..n], &mut x_z[..n]);
+        let (anchor_x, anchor_y, anchor_z) = (&anchor_x[..n], &anchor_y[..n], &anchor_z[..n]);
         for i in 0..n {
-            let (x, anchor, rest) = (positions[i], anchors[i], lengths[i]);
+            let x = DVec3::new(x_x[i], x_y[i], x_z[i]);
+            let anchor = DVec3::new(anchor_x[i], anchor_y[i], anchor_z[i]);
+            let rest = lengths[i];
             let offset = x - anchor;
             let distance = offset.length();
-            positions[i] = if distance > rest {
+            let x = if distance > rest {
                 anchor + offset * (rest / distance)
             } else {
                 x
             };
+            (x_x[i], x_y[i], x_z[i]) = (x.x, x.y, x.z);
         }
     }
 }

@@ -9,9 +9,10 @@ use std::ops::Range;
 
 use glam::{DAffine3, DVec3, Vec3};
 
+use crate::components::Xyz;
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
 use crate::grid_constraints::GridConstraints;
-use crate::grid_wind::{BodyForce, add_grid_triangle_forces, grid_triangle_forces};
+use crate::grid_wind::{BodyForce, SplitShares, add_grid_triangle_forces, grid_triangle_forces};
 use crate::model::{ClothModel, GridShape, Spring, SpringKind};
 use crate::nearest::nearest_points;
 use crate::parallel::{TeamSlot, fill, first_index_screened, sum};
@@ -149,7 +150,16 @@ pub struct Simulation {
     pub(crate) forces: Vec<DVec3>,
     pub(crate) spring_forces: Vec<DVec3>,
     pub(crate) triangle_forces: Vec<DVec3>,
-    pub(crate) previous_positions: Vec<DVec3>,
+    /// The position-based methods' state during a step, split by component ([`Xyz`]): the positions,
+    /// the velocities (split from and joined into `positions` and `velocities` at the ends of a step)
+    /// and the start positions of the sub-step.
+    pub(crate) split_positions: Xyz,
+    pub(crate) split_velocities: Xyz,
+    pub(crate) previous_positions: Xyz,
+    /// `forces` split, for the prediction of a general mesh.
+    pub(crate) split_forces: Xyz,
+    /// The position-based methods' wind shares on a grid ([`SplitShares`]).
+    pub(crate) split_shares: SplitShares,
     pub(crate) lambdas: Vec<f64>,
     pub(crate) backup_positions: Vec<DVec3>,
     pub(crate) backup_velocities: Vec<DVec3>,
@@ -341,6 +351,11 @@ impl Simulation {
                 .unwrap_or(0),
             _ => 0,
         };
+        let grid_triangulation = model
+            .grid
+            .filter(|shape| model.triangles == shape.triangles());
+        // The wind's shares of a grid's cells, split ([`SplitShares`]).
+        let cells = grid_triangulation.map_or(0, |g| (g.columns - 1) * (g.rows - 1));
         Ok(Simulation {
             wind: WindField::new(&params.wind),
             family: family_coefficients(&params),
@@ -349,9 +364,7 @@ impl Simulation {
                 .grid
                 .and_then(|shape| GridConstraints::new(shape, &model.springs)),
             grid_sweep: GridSweep::Auto,
-            grid_triangulation: model
-                .grid
-                .filter(|shape| model.triangles == shape.triangles()),
+            grid_triangulation,
             grid: model.grid,
             masses: model.masses,
             inverse_masses,
@@ -376,7 +389,11 @@ impl Simulation {
             forces: vec![DVec3::ZERO; n],
             spring_forces: vec![DVec3::ZERO; spring_count],
             triangle_forces: vec![DVec3::ZERO; triangle_count],
-            previous_positions: vec![DVec3::ZERO; n],
+            split_positions: Xyz::zeros(n),
+            split_velocities: Xyz::zeros(n),
+            previous_positions: Xyz::zeros(n),
+            split_forces: Xyz::zeros(n),
+            split_shares: [Xyz::zeros(cells), Xyz::zeros(cells)],
             lambdas: vec![0.0; spring_count],
             backup_positions: vec![DVec3::ZERO; n],
             backup_velocities: vec![DVec3::ZERO; n],
@@ -424,6 +441,13 @@ impl Simulation {
         } else {
             1
         };
+        // The position-based methods work on the state split by component from here to the end of the
+        // step (`components.rs`).
+        let split = self.params.method.is_position_based();
+        if split {
+            self.split_positions.split_from(&self.positions);
+            self.split_velocities.split_from(&self.velocities);
+        }
         let mut team = std::mem::take(&mut self.team);
         // From about 16 k particles (about 150 bytes each) a grid's data outgrows a core's cache, and the
         // team's passes are claimed chunk by chunk instead of split in equal parts.
@@ -466,6 +490,9 @@ impl Simulation {
                 }
                 self.place_pins(s, substeps);
             }
+            if split {
+                self.join_split_state();
+            }
             self.divergence()
         });
         self.team = team;
@@ -490,21 +517,41 @@ impl Simulation {
 
     /// Gives pinned particles the velocity that carries them along their path during sub-step `s`.
     fn prescribe_pins(&mut self, s: u32, substeps: u32, h: f64) {
+        let split = self.params.method.is_position_based();
         for k in 0..self.pinned_indices.len() {
             let from = self.pin_position(k, s as f64 / substeps as f64);
             let to = self.pin_position(k, (s + 1) as f64 / substeps as f64);
             let i = self.pinned_indices[k] as usize;
-            self.positions[i] = from;
-            self.velocities[i] = (to - from) / h;
+            let velocity = (to - from) / h;
+            if split {
+                self.split_positions.set(i, from);
+                self.split_velocities.set(i, velocity);
+            } else {
+                self.positions[i] = from;
+                self.velocities[i] = velocity;
+            }
         }
     }
 
     /// Puts pinned particles exactly on their path at the end of sub-step `s`.
     fn place_pins(&mut self, s: u32, substeps: u32) {
+        let split = self.params.method.is_position_based();
         for k in 0..self.pinned_indices.len() {
             let i = self.pinned_indices[k] as usize;
-            self.positions[i] = self.pin_position(k, (s + 1) as f64 / substeps as f64);
+            let at = self.pin_position(k, (s + 1) as f64 / substeps as f64);
+            if split {
+                self.split_positions.set(i, at);
+            } else {
+                self.positions[i] = at;
+            }
         }
+    }
+
+    /// Writes the position-based methods' split state into `positions` and `velocities`: at the end of
+    /// a step, and before a pass that reads them there ([`compute_forces`](Self::compute_forces)).
+    pub(crate) fn join_split_state(&mut self) {
+        self.split_positions.join_into(&mut self.positions);
+        self.split_velocities.join_into(&mut self.velocities);
     }
 
     pub(crate) fn parallel(&self) -> bool {
@@ -576,6 +623,7 @@ impl Simulation {
     pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<RowForces> {
         let shares = self.wind_acts();
         if shares && self.grid_triangulation.is_none() {
+            self.join_split_state();
             self.compute_forces(time, false);
             return None;
         }

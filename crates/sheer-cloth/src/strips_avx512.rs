@@ -2,15 +2,15 @@
 //! remainders.
 //!
 //! An along strip pairs particles within one row: stretch joins `2m` and `2m + 1`, bending `4m + j` and
-//! `4m + j + 2`. Left to the vectoriser, the loop over such pairs reads and writes each component of
-//! each end with a gather and a scatter (`objdump` of the two AVX-512 loops: 84 gathers, 60 scatters),
-//! and the along strips took 31 % of the default flag's frame for a third of its constraints
-//! (`perf record -e cpu-clock` of `fingerprint time 64x46 1 800`: 30.9 % along against 24.9 % for the
-//! twice as many constraints of the apart strips). Here a block of 16 particles (eight constraints) is
-//! loaded as six plain vectors, split into x, y and z of each half of the block by two-source permutes
-//! (as the vectoriser does for an apart strip), and the ends of the eight constraints picked out of those
-//! by one more permute per component; the results go back the same way. A strip's last, partial block
-//! uses masked loads and stores, which touch nothing past the strip.
+//! `4m + j + 2`. Left to the vectoriser, the loop over such pairs read and wrote each component of each
+//! end with a gather and a scatter (`objdump` of the two AVX-512 loops: 84 gathers, 60 scatters), and the
+//! along strips took 31 % of the default flag's frame for a third of its constraints (`perf record -e
+//! cpu-clock` of `fingerprint time 64x46 1 800`). Here, with the state split by component
+//! (`components.rs`), a block of 16 particles (eight constraints) is two plain vector loads per
+//! component, and the ends of the eight constraints are picked out of them by one two-source permute
+//! each; the results go back the same way. (With the particles as 24-byte `DVec3`, the block had first to
+//! be split into components by four more permutes per component, and joined again after.) A strip's
+//! last, partial block uses masked loads and stores, which touch nothing past the strip.
 //!
 //! An apart strip's whole blocks vectorise well on their own; its last few constraints (seven of the 63
 //! of every shear strip of the default flag) went through the loop's scalar remainder, and go here as one
@@ -25,8 +25,7 @@
 
 use std::arch::x86_64::*;
 
-use glam::DVec3;
-
+use crate::components::{XyzMut, XyzRef};
 use crate::grid_constraints::FamilyConstants;
 
 /// Constraints per block: one vector of eight `f64`.
@@ -35,48 +34,6 @@ pub(crate) const BLOCK: usize = 8;
 /// Index vectors of `_mm512_permutex2var_pd`, which picks lane `i` of its result from lane `idx[i]` of
 /// the sixteen lanes of its two sources (the first's 0–7, the second's 8–15).
 type Index = [i64; 8];
-
-/// Component `c` of eight particles stored as 24 consecutive `f64` in three vectors: the first permute
-/// takes the lanes that lie in the first two vectors, the second keeps those and adds the rest from the
-/// third.
-const fn split_components(c: usize) -> (Index, Index) {
-    let (mut first, mut second) = ([0; 8], [0; 8]);
-    let mut particle = 0;
-    while particle < 8 {
-        let at = 3 * particle + c;
-        if at < 16 {
-            first[particle] = at as i64;
-            second[particle] = particle as i64;
-        } else {
-            second[particle] = (8 + at - 16) as i64;
-        }
-        particle += 1;
-    }
-    (first, second)
-}
-
-/// The inverse of [`split_components`]: output vector `v` (doubles `8v..8v + 8` of the 24) from the
-/// x and y vectors by the first permute, then z by the second.
-const fn merge_components(v: usize) -> (Index, Index) {
-    let (mut first, mut second) = ([0; 8], [0; 8]);
-    let mut lane = 0;
-    while lane < 8 {
-        let at = 8 * v + lane;
-        let (particle, c) = (at / 3, at % 3);
-        match c {
-            0 => first[lane] = particle as i64,
-            1 => first[lane] = (8 + particle) as i64,
-            _ => {}
-        }
-        second[lane] = if c == 2 {
-            (8 + particle) as i64
-        } else {
-            lane as i64
-        };
-        lane += 1;
-    }
-    (first, second)
-}
 
 /// The first end of constraint `l` of a block, among its 16 particles.
 const fn first_end(half: usize, l: usize) -> usize {
@@ -113,17 +70,6 @@ const fn merge_ends(half: usize, h: usize) -> Index {
     }
     index
 }
-
-const SPLIT: [(Index, Index); 3] = [
-    split_components(0),
-    split_components(1),
-    split_components(2),
-];
-const MERGE: [(Index, Index); 3] = [
-    merge_components(0),
-    merge_components(1),
-    merge_components(2),
-];
 
 /// The constant tables of one strip layout.
 struct Tables {
@@ -194,62 +140,49 @@ unsafe fn store<const PARTIAL: bool>(p: *mut f64, count: usize, k: usize, v: __m
     }
 }
 
-/// x, y and z of the first `particles` (at most 16) of the 16 particles at `p`, each as the eight first
-/// ends then the eight second ends of the block's constraints; lanes past them are zero.
+/// One component of the first `particles` (at most 16) of the 16 particles at `p`, as the eight first
+/// ends then the eight second ends of the block's constraints (picked by `split`, the layout's
+/// [`Tables::split_ends`]); lanes past them are zero.
 ///
 /// # Safety
-/// `3 · particles` `f64` readable at `p`.
+/// `particles` `f64` readable at `p`.
 #[target_feature(enable = "avx512f")]
 #[inline]
 unsafe fn load_ends<const PARTIAL: bool>(
     p: *const f64,
     particles: usize,
-    tables: &Tables,
-) -> [[__m512d; 2]; 3] {
-    // SAFETY: `load` reads only the first `3 · particles` `f64`.
-    unsafe {
-        let r: [__m512d; 6] = std::array::from_fn(|k| load::<PARTIAL>(p, 3 * particles, k));
-        let (a, b) = (index(&tables.split_ends.0), index(&tables.split_ends.1));
-        std::array::from_fn(|c| {
-            let (first, second) = (index(&SPLIT[c].0), index(&SPLIT[c].1));
-            let low =
-                _mm512_permutex2var_pd(_mm512_permutex2var_pd(r[0], first, r[1]), second, r[2]);
-            let high =
-                _mm512_permutex2var_pd(_mm512_permutex2var_pd(r[3], first, r[4]), second, r[5]);
-            [
-                _mm512_permutex2var_pd(low, a, high),
-                _mm512_permutex2var_pd(low, b, high),
-            ]
-        })
-    }
+    split: (__m512i, __m512i),
+) -> [__m512d; 2] {
+    // SAFETY: `load` reads only the first `particles` `f64`.
+    let (low, high) = unsafe {
+        (
+            load::<PARTIAL>(p, particles, 0),
+            load::<PARTIAL>(p, particles, 1),
+        )
+    };
+    [
+        _mm512_permutex2var_pd(low, split.0, high),
+        _mm512_permutex2var_pd(low, split.1, high),
+    ]
 }
 
-/// Writes what [`load_ends`] read back to the first `particles` particles at `p`.
+/// Writes what [`load_ends`] read back to the first `particles` `f64` at `p` (`merge`: the layout's
+/// [`Tables::merge_ends`]).
 ///
 /// # Safety
-/// `3 · particles` `f64` writable at `p`.
+/// `particles` `f64` writable at `p`.
 #[target_feature(enable = "avx512f")]
 #[inline]
 unsafe fn store_ends<const PARTIAL: bool>(
     p: *mut f64,
     particles: usize,
-    ends: [[__m512d; 2]; 3],
-    tables: &Tables,
+    [a, b]: [__m512d; 2],
+    merge: [__m512i; 2],
 ) {
-    // SAFETY: `store` writes only the first `3 · particles` `f64`.
+    // SAFETY: `store` writes only the first `particles` `f64`.
     unsafe {
-        let (low, high) = (index(&tables.merge_ends[0]), index(&tables.merge_ends[1]));
-        // Particles 0–7 and 8–15, each as x, y and z.
-        let halves: [[__m512d; 3]; 2] = [low, high].map(|half| {
-            std::array::from_fn(|c| _mm512_permutex2var_pd(ends[c][0], half, ends[c][1]))
-        });
-        for (h, [x, y, z]) in halves.into_iter().enumerate() {
-            for (v, merge) in MERGE.iter().enumerate() {
-                let xy = _mm512_permutex2var_pd(x, index(&merge.0), y);
-                let xyz = _mm512_permutex2var_pd(xy, index(&merge.1), z);
-                store::<PARTIAL>(p, 3 * particles, 3 * h + v, xyz);
-            }
-        }
+        store::<PARTIAL>(p, particles, 0, _mm512_permutex2var_pd(a, merge[0], b));
+        store::<PARTIAL>(p, particles, 1, _mm512_permutex2var_pd(a, merge[1], b));
     }
 }
 
@@ -289,8 +222,8 @@ pub(crate) unsafe fn project_along<
     const DAMPED: bool,
     const HALF: usize,
 >(
-    x: &mut [DVec3],
-    previous: &[DVec3],
+    mut x: XyzMut<'_>,
+    previous: XyzRef<'_>,
     inverse_masses: &[f64],
     rest_lengths: &[f64],
     inverse_denominators: &[f64],
@@ -304,16 +237,17 @@ pub(crate) unsafe fn project_along<
         )
     };
     let constraints = rest_lengths.len();
-    assert!(
-        x.len() == 2 * constraints && previous.len() == x.len() && inverse_masses.len() == x.len()
-    );
+    let n = 2 * constraints;
+    assert!(x.x.len() == n && x.y.len() == n && x.z.len() == n);
+    assert!(previous.x.len() == n && previous.y.len() == n && previous.z.len() == n);
+    assert!(inverse_masses.len() == n);
     assert!(inverse_denominators.len() == constraints && lambdas.len() == constraints);
     let whole = constraints / BLOCK * BLOCK;
     for first in (0..whole).step_by(BLOCK) {
         // SAFETY: the asserts above make the block's particles and constraints valid.
         unsafe {
             block::<PBD, MULTIPLIERS, DAMPED, HALF, false>(
-                x,
+                &mut x,
                 previous,
                 inverse_masses,
                 rest_lengths,
@@ -329,7 +263,7 @@ pub(crate) unsafe fn project_along<
         // SAFETY: as above, for the `constraints − whole` left.
         unsafe {
             block::<PBD, MULTIPLIERS, DAMPED, HALF, true>(
-                x,
+                &mut x,
                 previous,
                 inverse_masses,
                 rest_lengths,
@@ -358,8 +292,8 @@ unsafe fn block<
     const HALF: usize,
     const PARTIAL: bool,
 >(
-    x: &mut [DVec3],
-    previous: &[DVec3],
+    x: &mut XyzMut<'_>,
+    previous: XyzRef<'_>,
     inverse_masses: &[f64],
     rest_lengths: &[f64],
     inverse_denominators: &[f64],
@@ -369,24 +303,21 @@ unsafe fn block<
     count: usize,
 ) {
     let tables = &TABLES[HALF - 1];
-    let (split_a, split_b) = (index(&tables.split_ends.0), index(&tables.split_ends.1));
+    let split = (index(&tables.split_ends.0), index(&tables.split_ends.1));
+    let merge = [index(&tables.merge_ends[0]), index(&tables.merge_ends[1])];
     let particles = 2 * count;
+    let at = 2 * first;
     // SAFETY (the loads and stores below): by the caller's contract, `particles` particles and `count`
-    // constraints from the block's first are valid; `DVec3` is three `f64` (`repr(C)`).
+    // constraints from the block's first are valid.
     unsafe {
-        let x_at = x.as_mut_ptr().add(2 * first).cast::<f64>();
-        let [[ax, bx], [ay, by], [az, bz]] = load_ends::<PARTIAL>(x_at, particles, tables);
-        let w = inverse_masses.as_ptr().add(2 * first);
-        let (w_low, w_high) = (
-            load::<PARTIAL>(w, particles, 0),
-            load::<PARTIAL>(w, particles, 1),
-        );
-        let w_a = _mm512_permutex2var_pd(w_low, split_a, w_high);
-        let w_b = _mm512_permutex2var_pd(w_low, split_b, w_high);
+        let [ax, bx] = load_ends::<PARTIAL>(x.x.as_ptr().add(at), particles, split);
+        let [ay, by] = load_ends::<PARTIAL>(x.y.as_ptr().add(at), particles, split);
+        let [az, bz] = load_ends::<PARTIAL>(x.z.as_ptr().add(at), particles, split);
+        let [w_a, w_b] = load_ends::<PARTIAL>(inverse_masses.as_ptr().add(at), particles, split);
         let previous_ends = if DAMPED {
-            let previous_at = previous.as_ptr().add(2 * first).cast::<f64>();
-            let [[pax, pbx], [pay, pby], [paz, pbz]] =
-                load_ends::<PARTIAL>(previous_at, particles, tables);
+            let [pax, pbx] = load_ends::<PARTIAL>(previous.x.as_ptr().add(at), particles, split);
+            let [pay, pby] = load_ends::<PARTIAL>(previous.y.as_ptr().add(at), particles, split);
+            let [paz, pbz] = load_ends::<PARTIAL>(previous.z.as_ptr().add(at), particles, split);
             [[pax, pay, paz], [pbx, pby, pbz]]
         } else {
             [[_mm512_setzero_pd(); 3]; 2]
@@ -408,7 +339,9 @@ unsafe fn block<
             constraints,
             family,
         );
-        store_ends::<PARTIAL>(x_at, particles, [[ax, bx], [ay, by], [az, bz]], tables);
+        store_ends::<PARTIAL>(x.x.as_mut_ptr().add(at), particles, [ax, bx], merge);
+        store_ends::<PARTIAL>(x.y.as_mut_ptr().add(at), particles, [ay, by], merge);
+        store_ends::<PARTIAL>(x.z.as_mut_ptr().add(at), particles, [az, bz], merge);
     }
 }
 
@@ -500,34 +433,20 @@ unsafe fn solve<
     ]
 }
 
-/// x, y and z of the first `particles` (at most 8) of the 8 consecutive particles at `p`; lanes past
-/// them are zero.
+/// x, y and z of the first `n` (at most 8) vectors of `v`; lanes past them are zero.
 ///
 /// # Safety
-/// `3 · particles` `f64` readable at `p`.
+/// `n` vectors in `v`.
 #[target_feature(enable = "avx512f")]
 #[inline]
-unsafe fn load_run<const PARTIAL: bool>(p: *const f64, particles: usize) -> [__m512d; 3] {
-    // SAFETY: `load` reads only the first `3 · particles` `f64`.
-    let r: [__m512d; 3] = std::array::from_fn(|k| unsafe { load::<PARTIAL>(p, 3 * particles, k) });
-    std::array::from_fn(|c| {
-        let (first, second) = (index(&SPLIT[c].0), index(&SPLIT[c].1));
-        _mm512_permutex2var_pd(_mm512_permutex2var_pd(r[0], first, r[1]), second, r[2])
-    })
-}
-
-/// Writes what [`load_run`] read back to the first `particles` particles at `p`.
-///
-/// # Safety
-/// `3 · particles` `f64` writable at `p`.
-#[target_feature(enable = "avx512f")]
-#[inline]
-unsafe fn store_run<const PARTIAL: bool>(p: *mut f64, particles: usize, [x, y, z]: [__m512d; 3]) {
-    for (v, merge) in MERGE.iter().enumerate() {
-        let xy = _mm512_permutex2var_pd(x, index(&merge.0), y);
-        let xyz = _mm512_permutex2var_pd(xy, index(&merge.1), z);
-        // SAFETY: `store` writes only the first `3 · particles` `f64`.
-        unsafe { store::<PARTIAL>(p, 3 * particles, v, xyz) };
+unsafe fn load_run(v: XyzRef<'_>, n: usize) -> [__m512d; 3] {
+    // SAFETY: `load` reads only the first `n` `f64` of each component.
+    unsafe {
+        [
+            load::<true>(v.x.as_ptr(), n, 0),
+            load::<true>(v.y.as_ptr(), n, 0),
+            load::<true>(v.z.as_ptr(), n, 0),
+        ]
     }
 }
 
@@ -546,10 +465,10 @@ pub(crate) unsafe fn project_apart_partial<
     const MULTIPLIERS: bool,
     const DAMPED: bool,
 >(
-    x_a: &mut [DVec3],
-    x_b: &mut [DVec3],
-    previous_a: &[DVec3],
-    previous_b: &[DVec3],
+    x_a: XyzMut<'_>,
+    x_b: XyzMut<'_>,
+    previous_a: XyzRef<'_>,
+    previous_b: XyzRef<'_>,
     inverse_mass_a: &[f64],
     inverse_mass_b: &[f64],
     rest_lengths: &[f64],
@@ -557,31 +476,24 @@ pub(crate) unsafe fn project_apart_partial<
     lambdas: &mut [f64],
     family: FamilyConstants,
 ) {
-    let n = x_a.len();
-    assert!(
-        x_b.len() == n
-            && previous_a.len() == n
-            && previous_b.len() == n
-            && inverse_mass_a.len() == n
-            && inverse_mass_b.len() == n
-    );
+    let n = x_a.x.len();
+    assert!(x_a.y.len() == n && x_a.z.len() == n && x_b.x.len() == n);
+    assert!(x_b.y.len() == n && x_b.z.len() == n);
+    assert!(previous_a.x.len() == n && previous_a.y.len() == n && previous_a.z.len() == n);
+    assert!(previous_b.x.len() == n && previous_b.y.len() == n && previous_b.z.len() == n);
+    assert!(inverse_mass_a.len() == n && inverse_mass_b.len() == n);
     assert!(rest_lengths.len() == n && inverse_denominators.len() == n && lambdas.len() == n);
     assert!(n < BLOCK, "{n} constraints are more than one block");
     if n == 0 {
         return;
     }
     // SAFETY (the loads and stores): the asserts above make `n` particles and constraints valid in
-    // every slice; `DVec3` is three `f64` (`repr(C)`).
+    // every slice.
     unsafe {
-        let a_at = x_a.as_mut_ptr().cast::<f64>();
-        let b_at = x_b.as_mut_ptr().cast::<f64>();
-        let a = load_run::<true>(a_at, n);
-        let b = load_run::<true>(b_at, n);
+        let a = load_run(x_a.as_ref(), n);
+        let b = load_run(x_b.as_ref(), n);
         let previous = if DAMPED {
-            [
-                load_run::<true>(previous_a.as_ptr().cast(), n),
-                load_run::<true>(previous_b.as_ptr().cast(), n),
-            ]
+            [load_run(previous_a, n), load_run(previous_b, n)]
         } else {
             [[_mm512_setzero_pd(); 3]; 2]
         };
@@ -597,7 +509,10 @@ pub(crate) unsafe fn project_apart_partial<
         };
         let [a, b] =
             solve::<PBD, MULTIPLIERS, DAMPED, true>([a, b], previous, w, constraints, family);
-        store_run::<true>(a_at, n, a);
-        store_run::<true>(b_at, n, b);
+        for (x, [x_x, x_y, x_z]) in [(x_a, a), (x_b, b)] {
+            store::<true>(x.x.as_mut_ptr(), n, 0, x_x);
+            store::<true>(x.y.as_mut_ptr(), n, 0, x_y);
+            store::<true>(x.z.as_mut_ptr(), n, 0, x_z);
+        }
     }
 }
