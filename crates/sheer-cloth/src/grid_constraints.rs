@@ -544,52 +544,25 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
     lambdas: &mut [f64],
     family: FamilyConstants,
 ) {
+    // With AVX-512 the loop takes the whole blocks and one masked block the rest.
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        use crate::strips_avx512::{BLOCK, project_apart_partial};
-        let whole = x_a.len() / BLOCK * BLOCK;
-        let (x_a, tail_a) = x_a.split_at_mut(whole);
-        let (x_b, tail_b) = x_b.split_at_mut(whole);
-        let (previous_a, previous_tail_a) = previous_a.split_at(whole);
-        let (previous_b, previous_tail_b) = previous_b.split_at(whole);
-        let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
-        project_apart::<PBD, MULTIPLIERS, DAMPED>(
-            x_a.x,
-            x_a.y,
-            x_a.z,
-            x_b.x,
-            x_b.y,
-            x_b.z,
-            previous_a.x,
-            previous_a.y,
-            previous_a.z,
-            previous_b.x,
-            previous_b.y,
-            previous_b.z,
-            &w_a[..whole],
-            &w_b[..whole],
-            &rest_lengths[..whole],
-            &inverse_denominators[..whole],
-            lambdas,
-            family,
-        );
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe {
-            project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
-                tail_a,
-                tail_b,
-                previous_tail_a,
-                previous_tail_b,
-                &w_a[whole..],
-                &w_b[whole..],
-                &rest_lengths[whole..],
-                &inverse_denominators[whole..],
-                tail_lambdas,
-                family,
-            )
-        };
-        return;
-    }
+    let masked_tail = std::arch::is_x86_feature_detected!("avx512f");
+    #[cfg(not(target_arch = "x86_64"))]
+    let masked_tail = false;
+    let n = x_a.len();
+    #[cfg(target_arch = "x86_64")]
+    let whole = if masked_tail {
+        n / crate::strips_avx512::BLOCK * crate::strips_avx512::BLOCK
+    } else {
+        n
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let whole = n;
+    let (x_a, tail_a) = x_a.split_at_mut(whole);
+    let (x_b, tail_b) = x_b.split_at_mut(whole);
+    let (previous_a, previous_tail_a) = previous_a.split_at(whole);
+    let (previous_b, previous_tail_b) = previous_b.split_at(whole);
+    let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
     project_apart::<PBD, MULTIPLIERS, DAMPED>(
         x_a.x,
         x_a.y,
@@ -603,12 +576,39 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
         previous_b.x,
         previous_b.y,
         previous_b.z,
-        w_a,
-        w_b,
-        rest_lengths,
-        inverse_denominators,
+        &w_a[..whole],
+        &w_b[..whole],
+        &rest_lengths[..whole],
+        &inverse_denominators[..whole],
         lambdas,
         family,
+    );
+    #[cfg(target_arch = "x86_64")]
+    if masked_tail {
+        // SAFETY: the CPU has AVX-512F, checked above.
+        unsafe {
+            crate::strips_avx512::project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
+                tail_a,
+                tail_b,
+                previous_tail_a,
+                previous_tail_b,
+                &w_a[whole..],
+                &w_b[whole..],
+                &rest_lengths[whole..],
+                &inverse_denominators[whole..],
+                tail_lambdas,
+                family,
+            )
+        };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (
+        tail_a,
+        tail_b,
+        previous_tail_a,
+        previous_tail_b,
+        tail_lambdas,
+        masked_tail,
     );
 }
 
@@ -732,6 +732,10 @@ pub(crate) fn project_along_loop<
     family: FamilyConstants,
 ) {
     let constraints = rest_lengths.len();
+    assert!(
+        constraints.is_multiple_of(HALF),
+        "whole chunks of {HALF} constraints"
+    );
     assert!(x.len() == 2 * constraints && previous.len() == x.len());
     assert!(inverse_masses.len() == x.len() && inverse_denominators.len() == constraints);
     for c in 0..constraints {

@@ -61,8 +61,8 @@ pub(crate) fn grid_triangle_forces(
 }
 
 /// The cells above and below particle row `row` of a grid of `rows` particle rows (those that exist):
-/// cell rows `row − 1` and `row`, each as `cell_row` gives it (two shares per cell, indexed like
-/// [`GridShape::triangles`]).
+/// cell rows `row − 1` and `row`, each as `cell_row` gives it (the shares of that row's cells, joined or
+/// split).
 pub(crate) fn cells_around<T>(
     rows: usize,
     row: usize,
@@ -357,8 +357,9 @@ pub(crate) fn split_grid_triangle_forces(
     });
 }
 
-/// [`cell_row`] on the split state: the shares of cell row `row` from the two particle rows it joins
-/// (`positions` and `velocities` hold those two rows), into that row's cells of `first` and `second`.
+/// One row of [`split_grid_triangle_forces`], for a caller that shares the rows out itself: the shares
+/// of a cell row from the two particle rows it joins (`positions` and `velocities` hold those two rows),
+/// into that row's cells of `first` and `second`.
 pub(crate) fn split_cell_row(
     columns: usize,
     wind: &Wind,

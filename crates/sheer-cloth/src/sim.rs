@@ -187,7 +187,7 @@ pub struct Simulation {
 /// ([`Simulation::prepare_row_forces`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RowForces {
-    /// The wind's corner shares, in `Simulation::triangle_forces`: the wind acts.
+    /// The wind's corner shares, in `Simulation::split_shares`: the wind acts.
     pub shares: bool,
     /// The shares are due to be renewed this sub-step, with these parameters and this air velocity
     /// (m/s), before the rows read them.
@@ -617,7 +617,7 @@ impl Simulation {
     }
 
     /// For the position-based solvers on a grid, which sum each row's forces in their first pass over
-    /// the rows ([`row_forces`](crate::grid_wind::row_forces)): what the rows add to the body force
+    /// the rows ([`split_row_forces`](crate::grid_wind::split_row_forces)): what the rows add to the body force
     /// ([`RowForces`]), or, when the triangles are not the grid's own, `None` after summing the forces
     /// into `self.forces` ([`compute_forces`](Simulation::compute_forces)).
     pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<RowForces> {

@@ -208,9 +208,9 @@ fn dot(a: [__m512d; 3], b: [__m512d; 3]) -> __m512d {
 
 /// Projects an along strip of `HALF` constraints per chunk of `2·HALF` particles (see
 /// `grid_constraints::project_along`), eight constraints at a time; the last block may be partial (its
-/// missing lanes are loaded as zeros, which make an inactive constraint, and not stored). The slices are
-/// those `project_along` takes, flattened: `x`, `previous` and `inverse_masses` per particle, the rest per
-/// constraint.
+/// missing lanes are loaded as zeros, which make an inactive constraint, and not stored). The arguments
+/// are those `project_along` takes: `x`, `previous` (split by component) and `inverse_masses` per
+/// particle, the rest per constraint.
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
@@ -237,6 +237,10 @@ pub(crate) unsafe fn project_along<
         )
     };
     let constraints = rest_lengths.len();
+    assert!(
+        constraints.is_multiple_of(HALF),
+        "whole chunks of {HALF} constraints"
+    );
     let n = 2 * constraints;
     assert!(x.x.len() == n && x.y.len() == n && x.z.len() == n);
     assert!(previous.x.len() == n && previous.y.len() == n && previous.z.len() == n);
@@ -278,7 +282,7 @@ pub(crate) unsafe fn project_along<
 }
 
 /// Projects constraints `first..first + count` (`count` ≤ 8; below 8 only with `PARTIAL`) of
-/// [`project`]'s strip.
+/// [`project_along`]'s strip.
 ///
 /// # Safety
 /// The slices as `project` asserts them, and `first + count` at most the constraint count.
