@@ -13,6 +13,7 @@ use std::ops::Range;
 use glam::DVec3;
 
 use crate::parallel::DisjointSlice;
+use crate::vectorise::by_cpu;
 
 /// Owned vectors split by component.
 #[derive(Clone, Debug, Default)]
@@ -46,20 +47,12 @@ impl Xyz {
 
     /// Overwrites these vectors with `vectors` (the same count).
     pub(crate) fn split_from(&mut self, vectors: &[DVec3]) {
-        let n = vectors.len();
-        let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
-        for (i, v) in vectors.iter().enumerate() {
-            (x[i], y[i], z[i]) = (v.x, v.y, v.z);
-        }
+        split(vectors, &mut self.x, &mut self.y, &mut self.z);
     }
 
     /// Writes these vectors into `vectors` (the same count).
     pub(crate) fn join_into(&self, vectors: &mut [DVec3]) {
-        let n = vectors.len();
-        let (x, y, z) = (&self.x[..n], &self.y[..n], &self.z[..n]);
-        for (i, v) in vectors.iter_mut().enumerate() {
-            *v = DVec3::new(x[i], y[i], z[i]);
-        }
+        join(&self.x, &self.y, &self.z, vectors);
     }
 
     /// The vectors joined.
@@ -96,6 +89,28 @@ impl Xyz {
             x: DisjointSlice::new(&mut self.x),
             y: DisjointSlice::new(&mut self.y),
             z: DisjointSlice::new(&mut self.z),
+        }
+    }
+}
+
+by_cpu! {
+    /// `vectors` into its components (each at least as long).
+    fn split(vectors: &[DVec3], x: &mut [f64], y: &mut [f64], z: &mut [f64]) {
+        let n = vectors.len();
+        let (x, y, z) = (&mut x[..n], &mut y[..n], &mut z[..n]);
+        for (i, v) in vectors.iter().enumerate() {
+            (x[i], y[i], z[i]) = (v.x, v.y, v.z);
+        }
+    }
+}
+
+by_cpu! {
+    /// Components (each at least as long as `vectors`) into `vectors`.
+    fn join(x: &[f64], y: &[f64], z: &[f64], vectors: &mut [DVec3]) {
+        let n = vectors.len();
+        let (x, y, z) = (&x[..n], &y[..n], &z[..n]);
+        for (i, v) in vectors.iter_mut().enumerate() {
+            *v = DVec3::new(x[i], y[i], z[i]);
         }
     }
 }
