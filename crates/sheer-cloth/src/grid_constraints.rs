@@ -563,19 +563,11 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
     let (previous_a, previous_tail_a) = previous_a.split_at(whole);
     let (previous_b, previous_tail_b) = previous_b.split_at(whole);
     let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
-    project_apart::<PBD, MULTIPLIERS, DAMPED>(
-        x_a.x,
-        x_a.y,
-        x_a.z,
-        x_b.x,
-        x_b.y,
-        x_b.z,
-        previous_a.x,
-        previous_a.y,
-        previous_a.z,
-        previous_b.x,
-        previous_b.y,
-        previous_b.z,
+    project_apart_loop::<PBD, MULTIPLIERS, DAMPED>(
+        x_a,
+        x_b,
+        previous_a,
+        previous_b,
         &w_a[..whole],
         &w_b[..whole],
         &rest_lengths[..whole],
@@ -609,6 +601,42 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
         previous_tail_b,
         tail_lambdas,
         masked_tail,
+    );
+}
+
+/// [`project_apart`] on split vectors: each component passed as its own slice.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project_apart_loop<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
+    x_a: XyzMut<'_>,
+    x_b: XyzMut<'_>,
+    previous_a: XyzRef<'_>,
+    previous_b: XyzRef<'_>,
+    w_a: &[f64],
+    w_b: &[f64],
+    rest_lengths: &[f64],
+    inverse_denominators: &[f64],
+    lambdas: &mut [f64],
+    family: FamilyConstants,
+) {
+    project_apart::<PBD, MULTIPLIERS, DAMPED>(
+        x_a.x,
+        x_a.y,
+        x_a.z,
+        x_b.x,
+        x_b.y,
+        x_b.z,
+        previous_a.x,
+        previous_a.y,
+        previous_a.z,
+        previous_b.x,
+        previous_b.y,
+        previous_b.z,
+        w_a,
+        w_b,
+        rest_lengths,
+        inverse_denominators,
+        lambdas,
+        family,
     );
 }
 
@@ -875,7 +903,7 @@ mod tests {
     }
 
     /// [`project_along`]'s signature, for a test to hold it and its loop side by side.
-    /// [`project_apart_strip`] (`STRIP`) or the loop [`project_apart`] alone on the first `count`
+    /// [`project_apart_strip`] (`STRIP`) or the loop [`project_apart_loop`] alone on the first `count`
     /// constraints of joined vectors: the whole arrays split, those constraints projected, the arrays
     /// joined back, so that a write past the strip would show in them.
     #[allow(clippy::too_many_arguments)]
@@ -926,19 +954,11 @@ mod tests {
                 family,
             );
         } else {
-            project_apart::<PBD, MULTIPLIERS, DAMPED>(
-                x_a.x,
-                x_a.y,
-                x_a.z,
-                x_b.x,
-                x_b.y,
-                x_b.z,
-                previous_a.x,
-                previous_a.y,
-                previous_a.z,
-                previous_b.x,
-                previous_b.y,
-                previous_b.z,
+            project_apart_loop::<PBD, MULTIPLIERS, DAMPED>(
+                x_a,
+                x_b,
+                previous_a,
+                previous_b,
                 w_a,
                 w_b,
                 rest,
