@@ -156,6 +156,8 @@ pub struct Simulation {
     pub(crate) split_positions: Xyz,
     pub(crate) split_velocities: Xyz,
     pub(crate) previous_positions: Xyz,
+    /// The start positions joined, for a general mesh's constraint batches.
+    pub(crate) joined_previous: Vec<DVec3>,
     /// `forces` split, for the prediction of a general mesh.
     pub(crate) split_forces: Xyz,
     /// The position-based methods' wind shares on a grid ([`SplitShares`]).
@@ -392,6 +394,7 @@ impl Simulation {
             split_positions: Xyz::zeros(n),
             split_velocities: Xyz::zeros(n),
             previous_positions: Xyz::zeros(n),
+            joined_previous: vec![DVec3::ZERO; n],
             split_forces: Xyz::zeros(n),
             split_shares: [Xyz::zeros(cells), Xyz::zeros(cells)],
             lambdas: vec![0.0; spring_count],
