@@ -544,42 +544,30 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
     lambdas: &mut [f64],
     family: FamilyConstants,
 ) {
-    // With AVX-512 the loop takes the whole blocks and one masked block the rest.
     #[cfg(target_arch = "x86_64")]
-    let masked_tail = std::arch::is_x86_feature_detected!("avx512f");
-    #[cfg(not(target_arch = "x86_64"))]
-    let masked_tail = false;
-    let n = x_a.len();
-    #[cfg(target_arch = "x86_64")]
-    let whole = if masked_tail {
-        n / crate::strips_avx512::BLOCK * crate::strips_avx512::BLOCK
-    } else {
-        n
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let whole = n;
-    let (x_a, tail_a) = x_a.split_at_mut(whole);
-    let (x_b, tail_b) = x_b.split_at_mut(whole);
-    let (previous_a, previous_tail_a) = previous_a.split_at(whole);
-    let (previous_b, previous_tail_b) = previous_b.split_at(whole);
-    let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
-    project_apart_loop::<PBD, MULTIPLIERS, DAMPED>(
-        x_a,
-        x_b,
-        previous_a,
-        previous_b,
-        &w_a[..whole],
-        &w_b[..whole],
-        &rest_lengths[..whole],
-        &inverse_denominators[..whole],
-        lambdas,
-        family,
-    );
-    #[cfg(target_arch = "x86_64")]
-    if masked_tail {
-        // SAFETY: the CPU has AVX-512F, checked above.
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        use crate::strips_avx512::{BLOCK, project_apart_partial};
+        let whole = x_a.len() / BLOCK * BLOCK;
+        let (x_a, tail_a) = x_a.split_at_mut(whole);
+        let (x_b, tail_b) = x_b.split_at_mut(whole);
+        let (previous_a, previous_tail_a) = previous_a.split_at(whole);
+        let (previous_b, previous_tail_b) = previous_b.split_at(whole);
+        let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
+        project_apart_loop::<PBD, MULTIPLIERS, DAMPED>(
+            x_a,
+            x_b,
+            previous_a,
+            previous_b,
+            &w_a[..whole],
+            &w_b[..whole],
+            &rest_lengths[..whole],
+            &inverse_denominators[..whole],
+            lambdas,
+            family,
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
         unsafe {
-            crate::strips_avx512::project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
+            project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
                 tail_a,
                 tail_b,
                 previous_tail_a,
@@ -592,15 +580,19 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
                 family,
             )
         };
+        return;
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (
-        tail_a,
-        tail_b,
-        previous_tail_a,
-        previous_tail_b,
-        tail_lambdas,
-        masked_tail,
+    project_apart_loop::<PBD, MULTIPLIERS, DAMPED>(
+        x_a,
+        x_b,
+        previous_a,
+        previous_b,
+        w_a,
+        w_b,
+        rest_lengths,
+        inverse_denominators,
+        lambdas,
+        family,
     );
 }
 
@@ -742,49 +734,50 @@ pub(crate) fn project_along<
     );
 }
 
-/// [`project_along`] one constraint at a time: the path of a CPU without AVX-512, and the reference
-/// its blocks are tested against.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn project_along_loop<
-    const PBD: bool,
-    const MULTIPLIERS: bool,
-    const DAMPED: bool,
-    const HALF: usize,
->(
-    x: XyzMut<'_>,
-    previous: XyzRef<'_>,
-    inverse_masses: &[f64],
-    rest_lengths: &[f64],
-    inverse_denominators: &[f64],
-    lambdas: &mut [f64],
-    family: FamilyConstants,
-) {
-    let constraints = rest_lengths.len();
-    assert!(
-        constraints.is_multiple_of(HALF),
-        "whole chunks of {HALF} constraints"
-    );
-    assert!(x.len() == 2 * constraints && previous.len() == x.len());
-    assert!(inverse_masses.len() == x.len() && inverse_denominators.len() == constraints);
-    for c in 0..constraints {
-        let a = 2 * HALF * (c / HALF) + c % HALF;
-        let b = a + HALF;
-        let mut x_a = DVec3::new(x.x[a], x.y[a], x.z[a]);
-        let mut x_b = DVec3::new(x.x[b], x.y[b], x.z[b]);
-        project::<PBD, MULTIPLIERS, DAMPED>(
-            &mut x_a,
-            &mut x_b,
-            previous.at(a),
-            previous.at(b),
-            inverse_masses[a],
-            inverse_masses[b],
-            rest_lengths[c],
-            inverse_denominators[c],
-            &mut lambdas[c],
-            family,
+by_cpu! {
+    /// [`project_along`] one constraint at a time: the path of a CPU without AVX-512, and the reference
+    /// its blocks are tested against (compiled per instruction set, [`by_cpu!`]).
+    pub(crate) fn project_along_loop<
+        const PBD: bool,
+        const MULTIPLIERS: bool,
+        const DAMPED: bool,
+        const HALF: usize,
+    >(
+        x: XyzMut<'_>,
+        previous: XyzRef<'_>,
+        inverse_masses: &[f64],
+        rest_lengths: &[f64],
+        inverse_denominators: &[f64],
+        lambdas: &mut [f64],
+        family: FamilyConstants,
+    ) {
+        let constraints = rest_lengths.len();
+        assert!(
+            constraints.is_multiple_of(HALF),
+            "whole chunks of {HALF} constraints"
         );
-        (x.x[a], x.y[a], x.z[a]) = (x_a.x, x_a.y, x_a.z);
-        (x.x[b], x.y[b], x.z[b]) = (x_b.x, x_b.y, x_b.z);
+        assert!(x.len() == 2 * constraints && previous.len() == x.len());
+        assert!(inverse_masses.len() == x.len() && inverse_denominators.len() == constraints);
+        for c in 0..constraints {
+            let a = 2 * HALF * (c / HALF) + c % HALF;
+            let b = a + HALF;
+            let mut x_a = DVec3::new(x.x[a], x.y[a], x.z[a]);
+            let mut x_b = DVec3::new(x.x[b], x.y[b], x.z[b]);
+            project::<PBD, MULTIPLIERS, DAMPED>(
+                &mut x_a,
+                &mut x_b,
+                previous.at(a),
+                previous.at(b),
+                inverse_masses[a],
+                inverse_masses[b],
+                rest_lengths[c],
+                inverse_denominators[c],
+                &mut lambdas[c],
+                family,
+            );
+            (x.x[a], x.y[a], x.z[a]) = (x_a.x, x_a.y, x_a.z);
+            (x.x[b], x.y[b], x.z[b]) = (x_b.x, x_b.y, x_b.z);
+        }
     }
 }
 
