@@ -77,6 +77,15 @@ pub(crate) fn cells_around<T>(
 /// Cells per block of the wind pass: eight `f64` lanes of AVX-512.
 const CELL_BLOCK: usize = 8;
 
+/// The first cells of the blocks of a row of `cells` cells (at least [`CELL_BLOCK`]): whole blocks, the
+/// last overlapping the one before it where the row does not fill it (a cell's shares are a pure
+/// function of the state, so computing a few twice gives the same bits).
+fn cell_block_starts(cells: usize) -> impl Iterator<Item = usize> {
+    (0..cells - CELL_BLOCK)
+        .step_by(CELL_BLOCK)
+        .chain([cells - CELL_BLOCK])
+}
+
 /// The corner shares of the two triangles of one cell, from the positions and velocities of its
 /// corners, `[left, right]` on its top and bottom rows; same corners and order as
 /// [`GridShape::triangles`].
@@ -148,10 +157,7 @@ by_cpu! {
                 }
                 continue;
             }
-            let starts = (0..cells - CELL_BLOCK)
-                .step_by(CELL_BLOCK)
-                .chain([cells - CELL_BLOCK]);
-            for start in starts {
+            for start in cell_block_starts(cells) {
                 let corners = |row: &[DVec3]| -> [DVec3; CELL_BLOCK + 1] {
                     row[start..start + CELL_BLOCK + 1].try_into().unwrap()
                 };
@@ -426,11 +432,7 @@ by_cpu! {
                 }
                 continue;
             }
-            // As in `cell_rows`: whole blocks, the last overlapping the one before it.
-            let starts = (0..cells - CELL_BLOCK)
-                .step_by(CELL_BLOCK)
-                .chain([cells - CELL_BLOCK]);
-            for start in starts {
+            for start in cell_block_starts(cells) {
                 let corners = |v: XyzRef<'_>| -> [[f64; CELL_BLOCK + 1]; 3] {
                     let end = start + CELL_BLOCK + 1;
                     [
