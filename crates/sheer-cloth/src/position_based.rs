@@ -873,8 +873,6 @@ impl Simulation {
                 unsafe { tethers.gather(particles_of(row), &positions) };
             }
         };
-        // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
-        // velocities, else the next sweep's opening batches.
         // The attachments and, on the last sweep, the velocities of row `row`.
         let end_row = |row: usize, last: bool| {
             // SAFETY: a pass, the pipeline's stage and the wavefront each give a row's end of a sweep
@@ -890,6 +888,8 @@ impl Simulation {
                 )
             };
         };
+        // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
+        // velocities, else the next sweep's opening batches.
         let close_row = |row: usize, last: bool| {
             project_row(closing.clone(), row);
             end_row(row, last);
