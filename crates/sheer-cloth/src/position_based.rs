@@ -338,8 +338,14 @@ struct Tethers<'a> {
     pin_positions: DisjointSlice<'a, DVec3>,
 }
 
-/// Particles per chunk of [`Tethers::apply`]: a grid row of up to 1024 columns in one.
+/// Particles per chunk of [`Tethers::apply_by_copies`]: a grid row of up to 1024 columns in one.
 const ANCHOR_CHUNK: usize = 1024;
+
+/// [`Tethers::apply`] takes the particles run by run when their runs of one anchor are this long on
+/// average: copying each particle's anchor next to it (scalar, 15 instructions a particle) had been
+/// 3.4 % of the default flag's frame, whose rows are each one run (`perf record -e cpu-clock` of
+/// `fingerprint time 64x46 1 3000`).
+const ANCHOR_RUN: usize = 16;
 
 thread_local! {
     /// The anchors' positions (m) of the particles [`Tethers::apply`] is pulling on this thread.
@@ -396,6 +402,49 @@ impl<'a> Tethers<'a> {
     /// No other thread may touch `range` of `positions`, or write the gathered positions of the pins
     /// that `range`'s particles are anchored to, while this runs.
     unsafe fn apply(&self, range: Range<usize>, positions: &DisjointXyz<'_>) {
+        let anchors = &self.anchors[range.clone()];
+        let runs = 1 + anchors.windows(2).filter(|pair| pair[0] != pair[1]).count();
+        // SAFETY (both): by the caller's contract.
+        if runs * ANCHOR_RUN <= anchors.len() {
+            unsafe { self.apply_by_runs(range, positions) }
+        } else {
+            unsafe { self.apply_by_copies(range, positions) }
+        }
+    }
+
+    /// [`apply`](Tethers::apply) for particles that come in runs anchored to one pin (a flag's hoist
+    /// anchors each row to the row's pin): each run with its anchor's position broadcast.
+    ///
+    /// # Safety
+    /// As [`apply`](Tethers::apply).
+    unsafe fn apply_by_runs(&self, range: Range<usize>, positions: &DisjointXyz<'_>) {
+        let mut start = range.start;
+        while start < range.end {
+            let pin = self.anchors[start];
+            let same = self.anchors[start..range.end]
+                .iter()
+                .take_while(|&&k| k == pin);
+            let run = start..start + same.count();
+            // SAFETY: by the caller's contract, no one writes the pin's position now, and the run's
+            // particles are this thread's.
+            let (anchor, x) = unsafe {
+                (
+                    self.pin_positions.get(pin as usize),
+                    positions.slice_mut(run.clone()),
+                )
+            };
+            let lengths = &self.lengths[run.clone()];
+            apply_tethers_to_anchor(x.x, x.y, x.z, anchor.x, anchor.y, anchor.z, lengths);
+            start = run.end;
+        }
+    }
+
+    /// [`apply`](Tethers::apply) for particles anchored to many different pins (a curtain's top edge
+    /// anchors each column to its own pin).
+    ///
+    /// # Safety
+    /// As [`apply`](Tethers::apply).
+    unsafe fn apply_by_copies(&self, range: Range<usize>, positions: &DisjointXyz<'_>) {
         // Each particle's anchor is copied next to it first: the attachment loop then reads contiguous
         // memory and vectorises (a gather inside it kept the compiler from it). The copies go to this
         // thread's scratch, a chunk at a time so that it stays small and in the cache (a cloth-sized
@@ -1170,16 +1219,42 @@ by_cpu! {
         for i in 0..n {
             let x = DVec3::new(x_x[i], x_y[i], x_z[i]);
             let anchor = DVec3::new(anchor_x[i], anchor_y[i], anchor_z[i]);
-            let rest = lengths[i];
-            let offset = x - anchor;
-            let distance = offset.length();
-            let x = if distance > rest {
-                anchor + offset * (rest / distance)
-            } else {
-                x
-            };
+            let x = tethered(x, anchor, lengths[i]);
             (x_x[i], x_y[i], x_z[i]) = (x.x, x.y, x.z);
         }
+    }
+}
+
+by_cpu! {
+    /// [`apply_tethers`] for particles that share one anchor, (`anchor_x`, `anchor_y`, `anchor_z`) (m).
+    fn apply_tethers_to_anchor(
+        x_x: &mut [f64],
+        x_y: &mut [f64],
+        x_z: &mut [f64],
+        anchor_x: f64,
+        anchor_y: f64,
+        anchor_z: f64,
+        lengths: &[f64],
+    ) {
+        let n = lengths.len();
+        let (x_x, x_y, x_z) = (&mut x_x[..n], &mut x_y[..n], &mut x_z[..n]);
+        let anchor = DVec3::new(anchor_x, anchor_y, anchor_z);
+        for i in 0..n {
+            let x = tethered(DVec3::new(x_x[i], x_y[i], x_z[i]), anchor, lengths[i]);
+            (x_x[i], x_y[i], x_z[i]) = (x.x, x.y, x.z);
+        }
+    }
+}
+
+/// `x` (m) pulled back onto the sphere of radius `length` (m) around `anchor` (m) if it lies outside.
+#[inline(always)]
+fn tethered(x: DVec3, anchor: DVec3, length: f64) -> DVec3 {
+    let offset = x - anchor;
+    let distance = offset.length();
+    if distance > length {
+        anchor + offset * (length / distance)
+    } else {
+        x
     }
 }
 
@@ -1531,6 +1606,72 @@ mod tests {
                 // Left to choose, a team on this small grid takes the pipeline: the same bits.
                 assert_eq!(passes, run(GridSweep::Auto, 2), "{method:?}: auto");
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tether_tests {
+    use super::{ANCHOR_RUN, Tethers};
+    use crate::components::Xyz;
+    use crate::parallel::DisjointSlice;
+    use glam::DVec3;
+
+    /// A deterministic pseudo-random number in [−0.5, 0.5).
+    fn jitter(i: usize, k: u64) -> f64 {
+        let mut z = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ k;
+        z = (z ^ (z >> 31)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+
+    /// The attachments run by runs of one anchor and by copied anchors give the same bits, whatever the
+    /// runs' lengths (one particle to the whole range), for particles inside and outside their tethers; `apply` takes the runs exactly when they average `ANCHOR_RUN` or more.
+    #[test]
+    fn runs_of_one_anchor_give_the_bits_of_copied_anchors() {
+        let n = 203;
+        let mut pin_positions: Vec<DVec3> = (0..7)
+            .map(|k| DVec3::new(jitter(k, 1), jitter(k, 2), jitter(k, 3)))
+            .collect();
+        for run in [1, 2, 7, 16, 17, 64, n] {
+            let anchors: Vec<u32> = (0..n).map(|i| ((i / run) % 7) as u32).collect();
+            let lengths: Vec<f64> = (0..n).map(|i| 0.7 + 0.5 * jitter(i, 4)).collect();
+            let start: Vec<DVec3> = (0..n)
+                .map(|i| DVec3::new(jitter(i, 5), jitter(i, 6), jitter(i, 7)) * 1.5)
+                .collect();
+            let tethers = Tethers {
+                anchors: &anchors,
+                lengths: &lengths,
+                pinned_indices: &[],
+                pin_positions: DisjointSlice::new(&mut pin_positions),
+            };
+            let moved = |how: &dyn Fn(&Tethers<'_>, &mut Xyz)| {
+                let mut x = Xyz::of(&start);
+                how(&tethers, &mut x);
+                x.to_vec3s()
+            };
+            // SAFETY (all three): one thread, and nothing writes the pins' positions.
+            let by_runs = moved(&|t, x| unsafe { t.apply_by_runs(3..n, &x.disjoint()) });
+            let by_copies = moved(&|t, x| unsafe { t.apply_by_copies(3..n, &x.disjoint()) });
+            let chosen = moved(&|t, x| unsafe { t.apply(3..n, &x.disjoint()) });
+            let bits = |v: &[DVec3]| {
+                v.iter()
+                    .map(|p| p.to_array().map(f64::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&by_runs), bits(&by_copies), "runs of {run}");
+            assert_eq!(bits(&chosen), bits(&by_copies), "runs of {run}");
+            assert_eq!(bits(&by_runs[..3]), bits(&start[..3]), "outside the range");
+            let pulled = (3..n).filter(|&i| by_runs[i] != start[i]).count();
+            assert!(
+                pulled > 20 && pulled < n - 20,
+                "{pulled} particles pulled back"
+            );
+            let runs = 1 + anchors[3..].windows(2).filter(|p| p[0] != p[1]).count();
+            assert_eq!(
+                runs * ANCHOR_RUN <= n - 3,
+                run >= 17,
+                "runs of {run}: {runs} runs"
+            );
         }
     }
 }
