@@ -512,14 +512,25 @@ pub(crate) fn split_row_forces(
     let velocity = [velocities.x, velocities.y, velocities.z];
     let gravity = gravity.to_array();
     for (c, forces) in [x, y, z].into_iter().enumerate() {
-        body_force_component(masses, velocity[c], gravity[c], air_damping, forces);
-        if let Some([above, below]) = cells {
-            let ([above_first, above_second], [below_first, below_second]) = (
-                component(above, c).map_or([None; 2], |pair| pair.map(Some)),
-                component(below, c).map_or([None; 2], |pair| pair.map(Some)),
-            );
-            add_shares_component(above_first, above_second, below_first, below_second, forces);
-        }
+        let Some([above, below]) = cells else {
+            body_force_component(masses, velocity[c], gravity[c], air_damping, forces);
+            continue;
+        };
+        let ([above_first, above_second], [below_first, below_second]) = (
+            component(above, c).map_or([None; 2], |pair| pair.map(Some)),
+            component(below, c).map_or([None; 2], |pair| pair.map(Some)),
+        );
+        body_force_and_shares_component(
+            masses,
+            velocity[c],
+            gravity[c],
+            air_damping,
+            above_first,
+            above_second,
+            below_first,
+            below_second,
+            forces,
+        );
     }
 }
 
@@ -576,27 +587,36 @@ fn add_component_at_particle(
 }
 
 by_cpu! {
-    /// One component of [`add_to_particle_row`], the end particles apart; each cell row's shares as
+    /// One component of [`body_force_row`] followed by [`add_to_particle_row`] in one loop (the same
+    /// operations in the same order: the same bits), the end particles apart; each cell row's shares as
     /// two separate slices (which the compiler knows do not overlap `forces`), `None` where there is no
     /// such row.
-    fn add_shares_component(
+    fn body_force_and_shares_component(
+        masses: &[f64],
+        velocities: &[f64],
+        gravity: f64,
+        air_damping: f64,
         above_first: Option<&[f64]>,
         above_second: Option<&[f64]>,
         below_first: Option<&[f64]>,
         below_second: Option<&[f64]>,
         forces: &mut [f64],
     ) {
-        let last = forces.len() - 1;
+        let n = forces.len();
+        let last = n - 1;
+        let (masses, velocities) = (&masses[..n], &velocities[..n]);
         // Rows of `last` cells: with that length known, the interior loop needs no bounds checks.
         let above = [above_first.map(|s| &s[..last]), above_second.map(|s| &s[..last])];
         let below = [below_first.map(|s| &s[..last]), below_second.map(|s| &s[..last])];
-        forces[0] = add_component_at_particle(forces[0], 0, above, below, false, true);
+        // As `body_force_component`.
+        let body = |i: usize| masses[i] * (gravity - air_damping * velocities[i]);
+        forces[0] = add_component_at_particle(body(0), 0, above, below, false, true);
         #[allow(clippy::needless_range_loop)]
         for column in 1..last {
             forces[column] =
-                add_component_at_particle(forces[column], column, above, below, true, true);
+                add_component_at_particle(body(column), column, above, below, true, true);
         }
-        forces[last] = add_component_at_particle(forces[last], last, above, below, true, false);
+        forces[last] = add_component_at_particle(body(last), last, above, below, true, false);
     }
 }
 
