@@ -433,13 +433,14 @@ by_cpu! {
                 continue;
             }
             for start in cell_block_starts(cells) {
-                let corners = |v: XyzRef<'_>| -> [[f64; CELL_BLOCK + 1]; 3] {
-                    let end = start + CELL_BLOCK + 1;
-                    [
-                        v.x[start..end].try_into().unwrap(),
-                        v.y[start..end].try_into().unwrap(),
-                        v.z[start..end].try_into().unwrap(),
-                    ]
+                let corners = |v: XyzRef<'_>| {
+                    let block = |c: &[f64], from: usize| -> [f64; CELL_BLOCK] {
+                        c[from..from + CELL_BLOCK].try_into().unwrap()
+                    };
+                    BlockCorners {
+                        left: [block(v.x, start), block(v.y, start), block(v.z, start)],
+                        right: [block(v.x, start + 1), block(v.y, start + 1), block(v.z, start + 1)],
+                    }
                 };
                 let (tx, bx, tv, bv) = (
                     corners(top_x),
@@ -460,19 +461,31 @@ by_cpu! {
     }
 }
 
-/// The shares of a block of cells from its corners' components (`[x, y, z]` of the top and bottom
-/// rows' positions and velocities, one more than the cells): `[first, second]` triangles' `[x, y, z]`.
-/// On arrays of its own, so that the compiler vectorises it across the block.
+/// One row's corners of a block of cells, by component: the left corners of the block's cells and their
+/// right corners (the same run of particles, one further on).
+///
+/// As two arrays rather than one of `CELL_BLOCK + 1`: the right corners were then read from the local
+/// copy one element on, a vector load straddling two of the copy's stores, which the CPU cannot forward
+/// from a store and waits out (the loads after the copies took a fifth of the wind pass's samples, `perf
+/// annotate` of `fingerprint time 64x46 1 3000`).
+struct BlockCorners {
+    left: [[f64; CELL_BLOCK]; 3],
+    right: [[f64; CELL_BLOCK]; 3],
+}
+
+/// The shares of a block of cells from its corners (`[x, y, z]` of the top and bottom rows' positions
+/// and velocities): `[first, second]` triangles' `[x, y, z]`. On arrays of its own, so that the compiler
+/// vectorises it across the block.
 #[inline(always)]
 fn split_cell_block(
     wind: &Wind,
     air_velocity: DVec3,
-    top_x: [[f64; CELL_BLOCK + 1]; 3],
-    bottom_x: [[f64; CELL_BLOCK + 1]; 3],
-    top_v: [[f64; CELL_BLOCK + 1]; 3],
-    bottom_v: [[f64; CELL_BLOCK + 1]; 3],
+    top_x: BlockCorners,
+    bottom_x: BlockCorners,
+    top_v: BlockCorners,
+    bottom_v: BlockCorners,
 ) -> [[[f64; CELL_BLOCK]; 3]; 2] {
-    let at = |c: &[[f64; CELL_BLOCK + 1]; 3], k: usize| DVec3::new(c[0][k], c[1][k], c[2][k]);
+    let at = |c: &[[f64; CELL_BLOCK]; 3], k: usize| DVec3::new(c[0][k], c[1][k], c[2][k]);
     let mut shares = [[[0.0; CELL_BLOCK]; 3]; 2];
     // An index loop: the corners are indexed around `k`, as in `cell_rows`.
     #[allow(clippy::needless_range_loop)]
@@ -480,10 +493,10 @@ fn split_cell_block(
         let [a, b] = cell(
             wind,
             air_velocity,
-            [at(&top_x, k), at(&top_x, k + 1)],
-            [at(&bottom_x, k), at(&bottom_x, k + 1)],
-            [at(&top_v, k), at(&top_v, k + 1)],
-            [at(&bottom_v, k), at(&bottom_v, k + 1)],
+            [at(&top_x.left, k), at(&top_x.right, k)],
+            [at(&bottom_x.left, k), at(&bottom_x.right, k)],
+            [at(&top_v.left, k), at(&top_v.right, k)],
+            [at(&bottom_v.left, k), at(&bottom_v.right, k)],
         );
         for c in 0..3 {
             shares[0][c][k] = a[c];
