@@ -342,8 +342,24 @@ by_cpu! {
 struct Tethers<'a> {
     anchors: &'a [u32],
     lengths: &'a [f64],
+    /// [`anchor_run_ends`] of `anchors`.
+    run_ends: &'a [u32],
     pinned_indices: &'a [u32],
     pin_positions: DisjointSlice<'a, DVec3>,
+}
+
+/// Per particle `i`, the index after the last of the particles `i, i + 1, …` anchored to the same pin
+/// as `i`: the end of its run, computed once for [`Tethers::apply`].
+pub(crate) fn anchor_run_ends(anchors: &[u32]) -> Vec<u32> {
+    let mut ends = vec![anchors.len() as u32; anchors.len()];
+    for i in (0..anchors.len().saturating_sub(1)).rev() {
+        ends[i] = if anchors[i] == anchors[i + 1] {
+            ends[i + 1]
+        } else {
+            i as u32 + 1
+        };
+    }
+    ends
 }
 
 /// Particles per chunk of [`Tethers::apply_by_copies`]: a grid row of up to 1024 columns in one.
@@ -370,6 +386,7 @@ impl<'a> Tethers<'a> {
         pinned_indices: &'a [u32],
         anchors: &'a [u32],
         lengths: &'a [f64],
+        run_ends: &'a [u32],
         pin_positions: &'a mut [DVec3],
     ) -> Option<Tethers<'a>> {
         if !simulation_params.long_range_attachments || pinned_indices.is_empty() {
@@ -378,6 +395,7 @@ impl<'a> Tethers<'a> {
         Some(Tethers {
             anchors,
             lengths,
+            run_ends,
             pinned_indices,
             pin_positions: DisjointSlice::new(pin_positions),
         })
@@ -410,10 +428,15 @@ impl<'a> Tethers<'a> {
     /// No other thread may touch `range` of `positions`, or write the gathered positions of the pins
     /// that `range`'s particles are anchored to, while this runs.
     unsafe fn apply(&self, range: Range<usize>, positions: &DisjointXyz<'_>) {
-        let anchors = &self.anchors[range.clone()];
-        let runs = 1 + anchors.windows(2).filter(|pair| pair[0] != pair[1]).count();
+        // The runs in `range`, counted up to one more than go by runs.
+        let most = range.len() / ANCHOR_RUN;
+        let (mut runs, mut i) = (0, range.start);
+        while i < range.end && runs <= most {
+            i = self.run_ends[i] as usize;
+            runs += 1;
+        }
         // SAFETY (both): by the caller's contract.
-        if runs * ANCHOR_RUN <= anchors.len() {
+        if runs <= most {
             unsafe { self.apply_by_runs(range, positions) }
         } else {
             unsafe { self.apply_by_copies(range, positions) }
@@ -429,10 +452,7 @@ impl<'a> Tethers<'a> {
         let mut start = range.start;
         while start < range.end {
             let pin = self.anchors[start];
-            let same = self.anchors[start..range.end]
-                .iter()
-                .take_while(|&&k| k == pin);
-            let run = start..start + same.count();
+            let run = start..(self.run_ends[start] as usize).min(range.end);
             // SAFETY: by the caller's contract, no one writes the pin's position now, and the run's
             // particles are this thread's.
             let (anchor, x) = unsafe {
@@ -554,6 +574,7 @@ impl Simulation {
             packed,
             tether_anchors,
             tether_lengths,
+            tether_run_ends,
             tether_pin_positions,
             pinned_indices,
             params,
@@ -570,6 +591,7 @@ impl Simulation {
             pinned_indices,
             tether_anchors,
             tether_lengths,
+            tether_run_ends,
             tether_pin_positions,
         );
         if let Some(tethers) = &tethers {
@@ -676,6 +698,7 @@ impl Simulation {
             forces,
             tether_anchors,
             tether_lengths,
+            tether_run_ends,
             tether_row_reach,
             tether_pin_positions,
             pinned_indices,
@@ -836,6 +859,7 @@ impl Simulation {
             pinned_indices,
             tether_anchors,
             tether_lengths,
+            tether_run_ends,
             tether_pin_positions,
         );
         let project_one = |strip: &Strip| {
@@ -1620,7 +1644,7 @@ mod tests {
 
 #[cfg(test)]
 mod tether_tests {
-    use super::{ANCHOR_RUN, Tethers};
+    use super::{ANCHOR_RUN, Tethers, anchor_run_ends};
     use crate::components::Xyz;
     use crate::parallel::DisjointSlice;
     use glam::DVec3;
@@ -1646,9 +1670,11 @@ mod tether_tests {
             let start: Vec<DVec3> = (0..n)
                 .map(|i| DVec3::new(jitter(i, 5), jitter(i, 6), jitter(i, 7)) * 1.5)
                 .collect();
+            let run_ends = anchor_run_ends(&anchors);
             let tethers = Tethers {
                 anchors: &anchors,
                 lengths: &lengths,
+                run_ends: &run_ends,
                 pinned_indices: &[],
                 pin_positions: DisjointSlice::new(&mut pin_positions),
             };

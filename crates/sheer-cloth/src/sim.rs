@@ -19,6 +19,7 @@ use crate::parallel::{TeamSlot, fill, first_index_screened, sum};
 use crate::params::{Method, SimParams, SpringParams, Wind};
 use crate::pipeline::Progress;
 use crate::position_based::PlanCache;
+use crate::position_based::anchor_run_ends;
 use crate::vectorise::by_cpu;
 use crate::wind::{WindField, corner_share_of_triangle_force};
 
@@ -136,6 +137,9 @@ pub struct Simulation {
     /// of a cloth without pins, have an infinite length (never pulled).
     pub(crate) tether_anchors: Vec<u32>,
     pub(crate) tether_lengths: Vec<f64>,
+    /// Per particle, the index after the last of the particles from it on that share its anchor
+    /// (`position_based::anchor_run_ends`).
+    pub(crate) tether_run_ends: Vec<u32>,
     /// On a grid, how many rows at most lie between a particle and its anchor (0 without pins): how far
     /// ahead of a row's attachments the pins' positions must be known.
     pub(crate) tether_row_reach: usize,
@@ -371,6 +375,7 @@ impl Simulation {
             masses: model.masses,
             inverse_masses,
             pin_starts: pin_targets.clone(),
+            tether_run_ends: anchor_run_ends(&tether_anchors),
             tether_anchors,
             tether_lengths,
             tether_row_reach,
