@@ -166,12 +166,6 @@ impl<'a> XyzRef<'a> {
         self.x.len()
     }
 
-    /// The first `mid` vectors and the rest.
-    #[inline]
-    pub(crate) fn split_at(self, mid: usize) -> (XyzRef<'a>, XyzRef<'a>) {
-        (self.range(0..mid), self.range(mid..self.len()))
-    }
-
     #[inline(always)]
     pub(crate) fn range(self, range: Range<usize>) -> XyzRef<'a> {
         XyzRef {
@@ -202,7 +196,7 @@ impl<'a> XyzMut<'a> {
     }
 
     /// The first `mid` vectors and the rest.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn split_at_mut(self, mid: usize) -> (XyzMut<'a>, XyzMut<'a>) {
         let (x, x_rest) = self.x.split_at_mut(mid);
         let (y, y_rest) = self.y.split_at_mut(mid);

@@ -527,10 +527,9 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
     }
 }
 
-/// Projects an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`. With AVX-512 the whole blocks of
-/// eight go through the vectorised loop ([`project_apart`]) and the rest through one masked block
-/// ([`strips_avx512`](crate::strips_avx512)), where the loop would end in a scalar remainder; otherwise
-/// all through the loop. Same bits either way.
+/// Projects an apart strip: constraint `k` joins `x_a[k]` and `x_b[k]`. With AVX-512 in blocks of eight,
+/// the last one masked ([`strips_avx512`](crate::strips_avx512)); otherwise through the loop the compiler
+/// vectorises ([`project_apart`]). Same bits either way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
     x_a: XyzMut<'_>,
@@ -546,37 +545,18 @@ pub(crate) fn project_apart_strip<const PBD: bool, const MULTIPLIERS: bool, cons
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx512f") {
-        use crate::strips_avx512::{BLOCK, project_apart_partial};
-        let whole = x_a.len() / BLOCK * BLOCK;
-        let (x_a, tail_a) = x_a.split_at_mut(whole);
-        let (x_b, tail_b) = x_b.split_at_mut(whole);
-        let (previous_a, previous_tail_a) = previous_a.split_at(whole);
-        let (previous_b, previous_tail_b) = previous_b.split_at(whole);
-        let (lambdas, tail_lambdas) = lambdas.split_at_mut(whole);
-        project_apart_loop::<PBD, MULTIPLIERS, DAMPED>(
-            x_a,
-            x_b,
-            previous_a,
-            previous_b,
-            &w_a[..whole],
-            &w_b[..whole],
-            &rest_lengths[..whole],
-            &inverse_denominators[..whole],
-            lambdas,
-            family,
-        );
         // SAFETY: the CPU has AVX-512F, checked just above.
         unsafe {
-            project_apart_partial::<PBD, MULTIPLIERS, DAMPED>(
-                tail_a,
-                tail_b,
-                previous_tail_a,
-                previous_tail_b,
-                &w_a[whole..],
-                &w_b[whole..],
-                &rest_lengths[whole..],
-                &inverse_denominators[whole..],
-                tail_lambdas,
+            crate::strips_avx512::project_apart::<PBD, MULTIPLIERS, DAMPED>(
+                x_a,
+                x_b,
+                previous_a,
+                previous_b,
+                w_a,
+                w_b,
+                rest_lengths,
+                inverse_denominators,
+                lambdas,
                 family,
             )
         };
@@ -1233,8 +1213,8 @@ mod tests {
         (rest, denominators, lambdas)
     }
 
-    /// An apart strip of any length, as the solver projects it (whole blocks in the vectorised loop,
-    /// the rest as a masked block with AVX-512), gives the bits of [`project`] one constraint at a time,
+    /// An apart strip of any length, as the solver projects it (with AVX-512 in blocks of eight, the
+    /// last one masked), gives the bits of [`project`] one constraint at a time,
     /// and touches no particle and no multiplier past the strip; with NaN, coincident ends, constraints
     /// switched off and at rest length, for PBD and XPBD with and without multipliers and damping.
     #[test]

@@ -12,9 +12,9 @@
 //! be split into components by four more permutes per component, and joined again after.) A strip's
 //! last, partial block uses masked loads and stores, which touch nothing past the strip.
 //!
-//! An apart strip's whole blocks vectorise well on their own; its last few constraints (seven of the 63
-//! of every shear strip of the default flag) went through the loop's scalar remainder, and go here as one
-//! masked block instead ([`project_apart_partial`]).
+//! An apart strip needs no permutes (constraint `k` joins particle `k` of two runs), and its whole blocks
+//! vectorise well on their own; here it goes block by block with its last few constraints (seven of the
+//! 63 of every shear strip of the default flag) as one masked block, in one call ([`project_apart`]).
 //!
 //! The arithmetic ([`solve`]) is that of [`project`](crate::grid_constraints::project), operation for
 //! operation and without fused multiply–adds, so the results are the same bits (tested against it and
@@ -437,38 +437,40 @@ unsafe fn solve<
     ]
 }
 
-/// x, y and z of the first `n` (at most 8) vectors of `v`; lanes past them are zero.
+/// x, y and z of vector block `k` (vectors `8k..8k + 8`) of the first `n` vectors of `v`; with `PARTIAL`,
+/// lanes past them are zero and not read.
 ///
 /// # Safety
-/// `n` vectors in `v`.
+/// `n` vectors in `v`, and block `k` whole unless `PARTIAL`.
 #[target_feature(enable = "avx512f")]
 #[inline]
-unsafe fn load_run(v: XyzRef<'_>, n: usize) -> [__m512d; 3] {
+unsafe fn load_xyz<const PARTIAL: bool>(v: XyzRef<'_>, n: usize, k: usize) -> [__m512d; 3] {
     // SAFETY: `load` reads only the first `n` `f64` of each component.
     unsafe {
         [
-            load::<true>(v.x.as_ptr(), n, 0),
-            load::<true>(v.y.as_ptr(), n, 0),
-            load::<true>(v.z.as_ptr(), n, 0),
+            load::<PARTIAL>(v.x.as_ptr(), n, k),
+            load::<PARTIAL>(v.y.as_ptr(), n, k),
+            load::<PARTIAL>(v.z.as_ptr(), n, k),
         ]
     }
 }
 
-/// Projects an apart strip of fewer than eight constraints (constraint `k` joins `x_a[k]` and `x_b[k]`;
-/// the slices are those of `grid_constraints::project_apart`) as one masked block, which touches nothing
-/// past the strip: the tail of a strip whose whole blocks the vectorised loop takes. That loop's scalar
-/// remainder cost a fifth of the apart strips' time on the default flag, whose shear strips have 63
-/// constraints (`perf annotate` of `fingerprint time 64x46 1 1500`).
+/// Projects an apart strip (constraint `k` joins `x_a[k]` and `x_b[k]`; the slices are those of
+/// `grid_constraints::project_apart`), eight constraints a block and the last few as one masked block,
+/// which touches nothing past the strip.
+///
+/// Whole blocks had gone through the vectorised loop (`grid_constraints::project_apart`) and the tail
+/// through a masked block of its own: two calls per strip, each passing eighteen slices through the
+/// run-time dispatch of `by_cpu!`, which with the strip's own dispatch took about 8 % of the default
+/// flag's frame for strips of 63 or 64 constraints (`perf record -e cpu-clock` of `fingerprint time 64x46
+/// 1 3000`). (Before the tail was masked, the loop's scalar remainder cost a fifth of the apart strips'
+/// time.)
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
 #[target_feature(enable = "avx512f")]
 #[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn project_apart_partial<
-    const PBD: bool,
-    const MULTIPLIERS: bool,
-    const DAMPED: bool,
->(
+pub(crate) unsafe fn project_apart<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
     x_a: XyzMut<'_>,
     x_b: XyzMut<'_>,
     previous_a: XyzRef<'_>,
@@ -487,36 +489,90 @@ pub(crate) unsafe fn project_apart_partial<
     assert!(previous_b.x.len() == n && previous_b.y.len() == n && previous_b.z.len() == n);
     assert!(inverse_mass_a.len() == n && inverse_mass_b.len() == n);
     assert!(rest_lengths.len() == n && inverse_denominators.len() == n && lambdas.len() == n);
-    assert!(n < BLOCK, "{n} constraints are more than one block");
-    if n == 0 {
-        return;
+    let mut strip = ApartStrip {
+        x_a,
+        x_b,
+        previous_a,
+        previous_b,
+        inverse_mass_a,
+        inverse_mass_b,
+        rest_lengths,
+        inverse_denominators,
+        lambdas,
+        n,
+    };
+    for k in 0..n / BLOCK {
+        // SAFETY: the asserts above make the `n` particles and constraints valid in every slice, and
+        // block `k` is whole.
+        unsafe { apart_block::<PBD, MULTIPLIERS, DAMPED, false>(&mut strip, k, family) };
     }
-    // SAFETY (the loads and stores): the asserts above make `n` particles and constraints valid in
-    // every slice.
+    if !n.is_multiple_of(BLOCK) {
+        // SAFETY: as above; the masked block reads and writes only the first `n`.
+        unsafe { apart_block::<PBD, MULTIPLIERS, DAMPED, true>(&mut strip, n / BLOCK, family) };
+    }
+}
+
+/// The slices of [`project_apart`], all `n` long.
+struct ApartStrip<'a, 'b> {
+    x_a: XyzMut<'a>,
+    x_b: XyzMut<'a>,
+    previous_a: XyzRef<'a>,
+    previous_b: XyzRef<'a>,
+    inverse_mass_a: &'a [f64],
+    inverse_mass_b: &'a [f64],
+    rest_lengths: &'a [f64],
+    inverse_denominators: &'a [f64],
+    lambdas: &'b mut [f64],
+    n: usize,
+}
+
+/// Projects block `k` of an apart strip (masked past its `n` constraints with `PARTIAL`).
+///
+/// # Safety
+/// The slices of `strip` all `strip.n` long, and block `k` whole unless `PARTIAL`.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn apart_block<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+    const PARTIAL: bool,
+>(
+    strip: &mut ApartStrip<'_, '_>,
+    k: usize,
+    family: FamilyConstants,
+) {
+    let n = strip.n;
+    // SAFETY (the loads and stores): by the caller's contract.
     unsafe {
-        let a = load_run(x_a.as_ref(), n);
-        let b = load_run(x_b.as_ref(), n);
+        let a = load_xyz::<PARTIAL>(strip.x_a.as_ref(), n, k);
+        let b = load_xyz::<PARTIAL>(strip.x_b.as_ref(), n, k);
         let previous = if DAMPED {
-            [load_run(previous_a, n), load_run(previous_b, n)]
+            [
+                load_xyz::<PARTIAL>(strip.previous_a, n, k),
+                load_xyz::<PARTIAL>(strip.previous_b, n, k),
+            ]
         } else {
             [[_mm512_setzero_pd(); 3]; 2]
         };
         let w = [
-            load::<true>(inverse_mass_a.as_ptr(), n, 0),
-            load::<true>(inverse_mass_b.as_ptr(), n, 0),
+            load::<PARTIAL>(strip.inverse_mass_a.as_ptr(), n, k),
+            load::<PARTIAL>(strip.inverse_mass_b.as_ptr(), n, k),
         ];
+        let first = BLOCK * k;
+        let count = n.saturating_sub(first).min(BLOCK);
         let constraints = Constraints {
-            rest: load::<true>(rest_lengths.as_ptr(), n, 0),
-            inverse_denominator: load::<true>(inverse_denominators.as_ptr(), n, 0),
-            lambdas: lambdas.as_mut_ptr(),
-            count: n,
+            rest: load::<PARTIAL>(strip.rest_lengths.as_ptr(), n, k),
+            inverse_denominator: load::<PARTIAL>(strip.inverse_denominators.as_ptr(), n, k),
+            lambdas: strip.lambdas.as_mut_ptr().add(first),
+            count,
         };
         let [a, b] =
-            solve::<PBD, MULTIPLIERS, DAMPED, true>([a, b], previous, w, constraints, family);
-        for (x, [x_x, x_y, x_z]) in [(x_a, a), (x_b, b)] {
-            store::<true>(x.x.as_mut_ptr(), n, 0, x_x);
-            store::<true>(x.y.as_mut_ptr(), n, 0, x_y);
-            store::<true>(x.z.as_mut_ptr(), n, 0, x_z);
+            solve::<PBD, MULTIPLIERS, DAMPED, PARTIAL>([a, b], previous, w, constraints, family);
+        for (x, [x_x, x_y, x_z]) in [(&mut strip.x_a, a), (&mut strip.x_b, b)] {
+            store::<PARTIAL>(x.x.as_mut_ptr(), n, k, x_x);
+            store::<PARTIAL>(x.y.as_mut_ptr(), n, k, x_y);
+            store::<PARTIAL>(x.z.as_mut_ptr(), n, k, x_z);
         }
     }
 }
