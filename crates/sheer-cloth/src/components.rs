@@ -238,6 +238,18 @@ impl DisjointXyz<'_> {
     }
 
     /// # Safety
+    /// No other thread may read or write particle `i` concurrently.
+    #[inline]
+    pub(crate) unsafe fn set(&self, i: usize, v: DVec3) {
+        // SAFETY: by the caller's contract.
+        unsafe {
+            self.x.set(i, v.x);
+            self.y.set(i, v.y);
+            self.z.set(i, v.z);
+        }
+    }
+
+    /// # Safety
     /// As [`DisjointSlice::slice`], for the particles of `range`.
     #[inline]
     pub(crate) unsafe fn slice(&self, range: Range<usize>) -> XyzRef<'_> {

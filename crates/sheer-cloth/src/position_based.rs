@@ -29,6 +29,7 @@ use crate::grid_wind::{
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts};
 use crate::params::SimParams;
+use crate::params::{Method, Wind};
 use crate::pipeline::{Pipeline, Progress, Stage};
 use crate::sim::{GridSweep, RowForces, Simulation, family_index};
 use crate::vectorise::by_cpu;
@@ -122,85 +123,8 @@ impl Simulation {
                 }
             });
         }
-        // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
-        // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
-        let stretch_stiffness = self.family[0].0;
-        let pbd_family: [f64; 3] = std::array::from_fn(|f| match pbd_stiffness {
-            Some(k) if self.family[f].0 > 0.0 => {
-                let relative = if stretch_stiffness > 0.0 {
-                    (self.family[f].0 / stretch_stiffness).min(1.0)
-                } else {
-                    1.0
-                };
-                1.0 - (1.0 - k * relative).powf(1.0 / iterations as f64)
-            }
-            _ => 0.0,
-        });
-        // Per-family constants of this sub-step. XPBD, Macklin et al. 2016 eqs. (18) and (26):
-        // α̃ = α/h², γ = α β / h with α = 1/k (m/N) and β = c (N·s/m). PBD: the correction is scaled by k'.
-        let constants: [(f64, f64, f64); 3] = std::array::from_fn(|f| {
-            let (stiffness, damping) = self.family[f];
-            if stiffness == 0.0 {
-                (0.0, 0.0, 0.0)
-            } else if pbd_stiffness.is_some() {
-                (pbd_family[f], 0.0, 0.0)
-            } else {
-                let compliance = 1.0 / stiffness;
-                (1.0, compliance / (h * h), compliance * damping / h)
-            }
-        });
+        let family_constants = self.solver_constants(h, iterations, pbd_stiffness);
         let is_pbd = pbd_stiffness.is_some();
-        // The divisor of each constraint's update depends only on h, the parameters and the masses, so
-        // it is inverted once and reused until one of them changes: the inner loop then has a single
-        // division and a single square root, which bound its throughput.
-        let key = (h, constants, is_pbd);
-        if self.denominator_key != Some(key) {
-            let Simulation {
-                springs,
-                inverse_masses,
-                packed,
-                grid_constraints,
-                ..
-            } = self;
-            let inverse_denominator = |spring: &Spring| {
-                let (scale, scaled_compliance, gamma) = constants[family_index(spring.kind)];
-                let w = inverse_masses[spring.a as usize] + inverse_masses[spring.b as usize];
-                if scale == 0.0 || w == 0.0 {
-                    0.0
-                } else if is_pbd {
-                    scale / w
-                } else {
-                    1.0 / ((1.0 + gamma) * w + scaled_compliance)
-                }
-            };
-            if let Some(grid) = grid_constraints {
-                let GridConstraints {
-                    springs,
-                    inverse_denominators,
-                    ..
-                } = grid;
-                fill(inverse_denominators, parallel, |c| {
-                    inverse_denominator(&springs[c])
-                });
-            } else {
-                packed.resize(springs.len(), PackedConstraint::default());
-                fill(packed, parallel, |c| {
-                    let spring = &springs[c];
-                    PackedConstraint {
-                        a: spring.a,
-                        b: spring.b,
-                        rest_length: spring.rest_length,
-                        inverse_denominator: inverse_denominator(spring),
-                        family: family_index(spring.kind) as u8,
-                    }
-                });
-            }
-            self.denominator_key = Some(key);
-        }
-        let family_constants: [FamilyConstants; 3] = std::array::from_fn(|f| FamilyConstants {
-            scaled_compliance: constants[f].1,
-            gamma: constants[f].2,
-        });
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
         // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
         let multipliers = iterations > 1 && !is_pbd;
@@ -534,6 +458,182 @@ unsafe fn end_sweep(
 }
 
 impl Simulation {
+    /// Runs a whole step of `substeps` sub-steps of `h` (s) from time `time` (s) as one pipelined pass
+    /// of the team, with the pins prescribed and placed row by row inside it, and returns whether it
+    /// did; when it did not (a method with multipliers, a mesh, no team in equal parts, a cloth too
+    /// short for its parts, …) nothing has changed and the caller steps sub-step by sub-step.
+    ///
+    /// Sub-step by sub-step, each sub-step is one pass, ended by a barrier at which the leader waits for
+    /// the helper, followed by the leader's serial work (the pins, the wind's renewal, the solver's
+    /// set-up), during which the helper waits; on the default flag on two threads these took about
+    /// 3 µs of each 50 µs sub-step (`rdtsc` around the passes, a temporary instrumentation). In one pass
+    /// the sub-steps follow each other like the stages within one: a part waits for its neighbour only
+    /// where their rows meet. Same bits as sub-step by sub-step (tested).
+    pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
+        let (iterations, pbd_stiffness) = match self.params.method {
+            Method::Pbd {
+                iterations,
+                stiffness,
+                ..
+            } => (iterations, Some(stiffness)),
+            Method::Xpbd { iterations, .. } => (iterations, None),
+            Method::SmallStepsXpbd { .. } => (1, None),
+            _ => return false,
+        };
+        let multipliers = iterations > 1 && pbd_stiffness.is_none();
+        let small = self.positions.len() < WAVEFRONT_MIN_PARTICLES;
+        let eligible = !multipliers
+            && self.grid_constraints.is_some()
+            && self.parallel()
+            && team_in_equal_parts().is_some()
+            && match self.grid_sweep {
+                GridSweep::Pipeline => true,
+                GridSweep::Auto => small,
+                _ => false,
+            }
+            && !(self.wind_acts() && self.grid_triangulation.is_none());
+        if !eligible {
+            return false;
+        }
+        // The wind's renewals, sub-step by sub-step as `Simulation::step` and `prepare_row_forces` make
+        // them; undone if the pass cannot run.
+        let stale = self.wind_stale;
+        let wind = self.params.wind;
+        let renewals = (0..substeps)
+            .map(|s| {
+                if wind.per_substep
+                    && wind.substeps_per_update > 1
+                    && s % wind.substeps_per_update == 0
+                {
+                    self.wind_stale = true;
+                }
+                self.due_wind_renewal(time + s as f64 * h)
+            })
+            .collect();
+        let step = WholeStep { renewals };
+        let row_forces = RowForces {
+            shares: self.wind_acts(),
+            renew: None,
+        };
+        let family = self.solver_constants(h, iterations, pbd_stiffness);
+        // The first sub-step's pins; the pass moves them on at the end of each sub-step.
+        self.prescribe_pins(0, substeps, h);
+        let ran = if pbd_stiffness.is_some() {
+            self.project_grid_constraints::<true, false>(
+                h,
+                iterations,
+                family,
+                Some(row_forces),
+                Some(&step),
+            )
+        } else {
+            self.project_grid_constraints::<false, false>(
+                h,
+                iterations,
+                family,
+                Some(row_forces),
+                Some(&step),
+            )
+        };
+        if ran {
+            self.cached_forces_valid = false;
+        } else {
+            self.wind_stale = stale;
+        }
+        ran
+    }
+
+    /// The per-family constants of a sub-step of length `h` (s) with `iterations` sweeps (PBD with
+    /// stiffness `pbd_stiffness`, else XPBD), with the constraints' inverted divisors brought up to date.
+    fn solver_constants(
+        &mut self,
+        h: f64,
+        iterations: u32,
+        pbd_stiffness: Option<f64>,
+    ) -> [FamilyConstants; 3] {
+        let parallel = self.parallel();
+        // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
+        // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
+        let stretch_stiffness = self.family[0].0;
+        let pbd_family: [f64; 3] = std::array::from_fn(|f| match pbd_stiffness {
+            Some(k) if self.family[f].0 > 0.0 => {
+                let relative = if stretch_stiffness > 0.0 {
+                    (self.family[f].0 / stretch_stiffness).min(1.0)
+                } else {
+                    1.0
+                };
+                1.0 - (1.0 - k * relative).powf(1.0 / iterations as f64)
+            }
+            _ => 0.0,
+        });
+        // Per-family constants of this sub-step. XPBD, Macklin et al. 2016 eqs. (18) and (26):
+        // α̃ = α/h², γ = α β / h with α = 1/k (m/N) and β = c (N·s/m). PBD: the correction is scaled by k'.
+        let constants: [(f64, f64, f64); 3] = std::array::from_fn(|f| {
+            let (stiffness, damping) = self.family[f];
+            if stiffness == 0.0 {
+                (0.0, 0.0, 0.0)
+            } else if pbd_stiffness.is_some() {
+                (pbd_family[f], 0.0, 0.0)
+            } else {
+                let compliance = 1.0 / stiffness;
+                (1.0, compliance / (h * h), compliance * damping / h)
+            }
+        });
+        let is_pbd = pbd_stiffness.is_some();
+        // The divisor of each constraint's update depends only on h, the parameters and the masses, so
+        // it is inverted once and reused until one of them changes: the inner loop then has a single
+        // division and a single square root, which bound its throughput.
+        let key = (h, constants, is_pbd);
+        if self.denominator_key != Some(key) {
+            let Simulation {
+                springs,
+                inverse_masses,
+                packed,
+                grid_constraints,
+                ..
+            } = self;
+            let inverse_denominator = |spring: &Spring| {
+                let (scale, scaled_compliance, gamma) = constants[family_index(spring.kind)];
+                let w = inverse_masses[spring.a as usize] + inverse_masses[spring.b as usize];
+                if scale == 0.0 || w == 0.0 {
+                    0.0
+                } else if is_pbd {
+                    scale / w
+                } else {
+                    1.0 / ((1.0 + gamma) * w + scaled_compliance)
+                }
+            };
+            if let Some(grid) = grid_constraints {
+                let GridConstraints {
+                    springs,
+                    inverse_denominators,
+                    ..
+                } = grid;
+                fill(inverse_denominators, parallel, |c| {
+                    inverse_denominator(&springs[c])
+                });
+            } else {
+                packed.resize(springs.len(), PackedConstraint::default());
+                fill(packed, parallel, |c| {
+                    let spring = &springs[c];
+                    PackedConstraint {
+                        a: spring.a,
+                        b: spring.b,
+                        rest_length: spring.rest_length,
+                        inverse_denominator: inverse_denominator(spring),
+                        family: family_index(spring.kind) as u8,
+                    }
+                });
+            }
+            self.denominator_key = Some(key);
+        }
+        let family_constants: [FamilyConstants; 3] = std::array::from_fn(|f| FamilyConstants {
+            scaled_compliance: constants[f].1,
+            gamma: constants[f].2,
+        });
+        family_constants
+    }
+
     /// The constraint sweeps of a sub-step of length `h` (s): a grid's
     /// ([`project_grid_constraints`](Simulation::project_grid_constraints), with `row_forces`) or a
     /// general mesh's ([`project_mesh_constraints`](Simulation::project_mesh_constraints)).
@@ -545,7 +645,9 @@ impl Simulation {
         row_forces: Option<RowForces>,
     ) {
         if self.grid_constraints.is_some() {
-            self.project_grid_constraints::<PBD, MULTIPLIERS>(h, iterations, family, row_forces)
+            self.project_grid_constraints::<PBD, MULTIPLIERS>(
+                h, iterations, family, row_forces, None,
+            );
         } else {
             self.project_mesh_constraints::<PBD, MULTIPLIERS>(h, iterations, family)
         }
@@ -592,7 +694,7 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_run_ends,
-            tether_pin_positions,
+            &mut tether_pin_positions[..pinned_indices.len()],
         );
         if let Some(tethers) = &tethers {
             // SAFETY: no pass is running.
@@ -689,7 +791,8 @@ impl Simulation {
         iterations: u32,
         family: [FamilyConstants; 3],
         row_forces: Option<RowForces>,
-    ) {
+        step: Option<&WholeStep>,
+    ) -> bool {
         let parallel = self.parallel();
         let Simulation {
             split_positions: positions,
@@ -702,6 +805,8 @@ impl Simulation {
             tether_row_reach,
             tether_pin_positions,
             pinned_indices,
+            pin_starts,
+            pin_targets,
             params,
             inverse_masses,
             masses,
@@ -756,11 +861,15 @@ impl Simulation {
             1
         };
         let renew = row_forces.and_then(|r| r.renew);
+        // The wind's renewal in each sub-step: one sub-step's, or a whole step's in one pass.
+        let this_substep = [renew];
+        let renewals = step.map_or(&this_substep[..], |step| &step.renewals[..]);
         // The sub-step as one wavefront: the wind's shares (when due) and the prediction, then the batches
         // of every sweep, each sweep followed by its end.
         let wavefront = 'plan: {
             // Decided before the plan is built, so that a small cloth's sub-step builds none.
             let parts = match sweep_order {
+                _ if step.is_some() => break 'plan None,
                 GridSweep::Passes | GridSweep::BatchByBatch | GridSweep::Pipeline => {
                     break 'plan None;
                 }
@@ -809,10 +918,16 @@ impl Simulation {
                 _ => break 'plan None,
             };
             // The plan of the sub-step before serves unless one of the things it depends on changed.
-            let key = (renew.is_some(), iterations, parts, progress.cuts_moved());
-            if pipeline_plan.key != Some(key) {
+            let renewed = renewals.iter().map(Option::is_some);
+            let moves = progress.cuts_moved();
+            let current = pipeline_plan.key.as_ref().is_some_and(|key| {
+                key.0.iter().copied().eq(renewed.clone())
+                    && (key.1, key.2, key.3) == (iterations, parts, moves)
+            });
+            if !current {
+                let renewed: Vec<bool> = renewed.collect();
                 pipeline_plan.plan = PipelineStages::new(
-                    renew.is_some(),
+                    &renewed,
                     strips,
                     by_last_row,
                     middle.clone(),
@@ -821,7 +936,7 @@ impl Simulation {
                     parts,
                     progress,
                 );
-                pipeline_plan.key = Some(key);
+                pipeline_plan.key = Some((renewed, iterations, parts, moves));
             }
             if sweep_order == GridSweep::Pipeline {
                 assert!(
@@ -831,6 +946,10 @@ impl Simulation {
             }
             pipeline_plan.plan.as_ref()
         };
+        // A whole step goes only as one pipelined pass; the caller steps sub-step by sub-step otherwise.
+        if step.is_some() && pipeline.is_none() {
+            return false;
+        }
         if pipeline.is_none()
             && !prediction_in_wavefront
             && let Some((wind, air_velocity)) = renew
@@ -854,14 +973,22 @@ impl Simulation {
         let positions = positions.disjoint();
         let previous = previous_positions.disjoint();
         let velocities = velocities.disjoint();
-        let tethers = Tethers::of_substep(
-            params,
-            pinned_indices,
-            tether_anchors,
-            tether_lengths,
-            tether_run_ends,
-            tether_pin_positions,
-        );
+        // The pins' gathered positions, in two buffers: a whole step's sub-steps take turns, so that a
+        // part gathering the next sub-step's pins cannot overwrite those a slower part's attachments
+        // still read (it gathers the sub-step after next only once every part has finished the next
+        // sub-step's prediction: `Stage::after_all`).
+        let (first_buffer, second_buffer) = tether_pin_positions.split_at_mut(pinned_indices.len());
+        let tethers = [first_buffer, second_buffer].map(|buffer| {
+            Tethers::of_substep(
+                params,
+                pinned_indices,
+                tether_anchors,
+                tether_lengths,
+                tether_run_ends,
+                buffer,
+            )
+        });
+        let tethers_of = |substep: usize| tethers[substep % 2].as_ref();
         let project_one = |strip: &Strip| {
             let family = family[family_index(strip.kind)];
             let constraints = strip.first..strip.first + strip.count;
@@ -904,7 +1031,7 @@ impl Simulation {
         // The sub-step's forces (unless summed already) and prediction on row `row`, and the gather of
         // the row's pins' predicted positions for the attachments (no projection moves a pin: inverse
         // mass 0).
-        let predict_row = |row: usize| {
+        let predict_row = |tethers: Option<&Tethers<'_>>, row: usize| {
             let range = particles_of(row);
             // SAFETY: each row goes to one part of a pass; the cells around it are written by the wind
             // before (a pass before, the pipeline's stage before on any part, or the wavefront's wind
@@ -946,7 +1073,7 @@ impl Simulation {
                     predict(row_forces.as_ref());
                 });
             };
-            if let Some(tethers) = &tethers {
+            if let Some(tethers) = tethers {
                 // SAFETY: no attachment reads the row's pins meanwhile: a pass runs none, the
                 // pipeline's stage runs them only after every part has finished it
                 // (`Stage::after_all`), and the wavefront keeps them behind this item by the tethers'
@@ -955,14 +1082,14 @@ impl Simulation {
             }
         };
         // The attachments and, on the last sweep, the velocities of row `row`.
-        let end_row = |row: usize, last: bool| {
+        let end_row = |tethers: Option<&Tethers<'_>>, row: usize, last: bool| {
             // SAFETY: a pass, the pipeline's stage and the wavefront each give a row's end of a sweep
             // to one part or seam, after every strip that touches the row in that sweep, before any of
             // the next, and after the pins its attachments read were gathered.
             unsafe {
                 end_sweep(
                     particles_of(row),
-                    tethers.as_ref(),
+                    tethers,
                     last.then_some((&velocities, 1.0 / h)),
                     &positions,
                     &previous,
@@ -971,16 +1098,16 @@ impl Simulation {
         };
         // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
         // velocities, else the next sweep's opening batches.
-        let close_row = |row: usize, last: bool| {
+        let close_row = |tethers: Option<&Tethers<'_>>, row: usize, last: bool| {
             project_row(closing.clone(), row);
-            end_row(row, last);
+            end_row(tethers, row, last);
             if !last {
                 project_row(0..opening, row);
             }
         };
         // The wind's shares of cell row `row`, from particle rows `row` and `row + 1`.
-        let wind_cell_row = |row: usize| {
-            let (wind, air_velocity) = renew.expect("a wind item renews the shares");
+        let wind_cell_row = |renewal: Option<(Wind, DVec3)>, row: usize| {
+            let (wind, air_velocity) = renewal.expect("a wind item renews the shares");
             let rows_of_cell = row * columns..(row + 2) * columns;
             // SAFETY: the pipeline and the wavefront run cell row `row` on one part, while no part
             // writes particle rows `row` and `row + 1` or reads the cell row.
@@ -997,31 +1124,67 @@ impl Simulation {
                 )
             };
         };
+        // In a whole step's pass, the end of sub-step `substep` on row `row`: the row's pins put on their
+        // paths and given the velocity that carries them along them over the next sub-step, as
+        // `Simulation::place_pins` and `Simulation::prescribe_pins` do between sub-steps (the same
+        // expressions: the same bits). No item of the sub-step runs on the row after this, and every item
+        // of the next that reads the row runs after it.
+        let substep_count = renewals.len();
+        let pins_of_row = |row: usize| {
+            let at = |i: usize| pinned_indices.partition_point(|&k| (k as usize) < i);
+            let particles = particles_of(row);
+            at(particles.start)..at(particles.end)
+        };
+        let move_pins_of_row = |substep: usize, row: usize| {
+            let pin_position = |k: usize, s: usize| {
+                pin_starts[k].lerp(pin_targets[k], s as f64 / substep_count as f64)
+            };
+            for k in pins_of_row(row) {
+                let i = pinned_indices[k] as usize;
+                let from = pin_position(k, substep + 1);
+                // SAFETY: the row is this part's while its end of the sub-step runs.
+                unsafe {
+                    positions.set(i, from);
+                    if substep + 1 < substep_count {
+                        let to = pin_position(k, substep + 2);
+                        velocities.set(i, (to - from) / h);
+                    }
+                }
+            }
+        };
         if let Some(plan) = pipeline {
             progress.reset(plan.pipeline.parts());
             let shared_progress = &*progress;
-            let run_item = |stage: usize, row: usize| match plan.kinds[stage] {
-                StageKind::Wind => wind_cell_row(row),
-                StageKind::Open => {
-                    predict_row(row);
-                    project_row(0..opening, row);
+            let run_item = |stage: usize, row: usize| {
+                let substep = plan.substeps[stage];
+                match plan.kinds[stage] {
+                    StageKind::Wind => wind_cell_row(renewals[substep], row),
+                    StageKind::Open => {
+                        predict_row(tethers_of(substep), row);
+                        project_row(0..opening, row);
+                    }
+                    StageKind::Batch(batch) => project_row(batch..batch + 1, row),
+                    StageKind::Close { last } => {
+                        close_row(tethers_of(substep), row, last);
+                        if last && step.is_some() {
+                            move_pins_of_row(substep, row);
+                        }
+                    }
                 }
-                StageKind::Batch(batch) => project_row(batch..batch + 1, row),
-                StageKind::Close { last } => close_row(row, last),
             };
             // One index per thread of the team (`team_in_equal_parts`), all at once.
             parts(plan.pipeline.parts(), parallel, 1, |part| {
                 part.for_each(|p| plan.pipeline.run_part(p, shared_progress, run_item))
             });
             progress.rebalance(&plan.pipeline);
-            return;
+            return true;
         }
         // First pass (unless the wavefront does it): the forces (unless summed already), the prediction
         // and the pins' gather, then, pass by pass, the opening batches, row by row.
         if !prediction_in_wavefront {
             parts(rows, parallel, row_grain, |rows| {
                 for row in rows {
-                    predict_row(row);
+                    predict_row(tethers_of(0), row);
                     if wavefront.is_none() {
                         project_row(0..opening, row);
                     }
@@ -1033,12 +1196,12 @@ impl Simulation {
                 // Last row `row` of the cell row above it (none above the first row).
                 WaveItem::Wind => {
                     if row > 0 {
-                        wind_cell_row(row - 1)
+                        wind_cell_row(renew, row - 1)
                     }
                 }
-                WaveItem::Predict => predict_row(row),
+                WaveItem::Predict => predict_row(tethers_of(0), row),
                 WaveItem::Batch(batch) => project_row(batch..batch + 1, row),
-                WaveItem::End { last } => end_row(row, last),
+                WaveItem::End { last } => end_row(tethers_of(0), row, last),
             };
             // Each part's own strips need nothing across a cut, so the parts run at once; the seams
             // around the cuts need both neighbours' parts done, and touch disjoint rows of their own.
@@ -1052,7 +1215,7 @@ impl Simulation {
                     .filter(|&s| s > 0)
                     .for_each(|s| plan.run_seam(s, parts_count, run_item))
             });
-            return;
+            return true;
         }
         for iteration in 0..iterations {
             for batch in middle.clone() {
@@ -1065,9 +1228,10 @@ impl Simulation {
             // Last pass of the sweep: the closing batches, the attachments and, on the last sweep, the
             // velocities, else the next sweep's opening batches, row by row.
             parts(rows, parallel, row_grain, |rows| {
-                rows.for_each(|row| close_row(row, last))
+                rows.for_each(|row| close_row(tethers_of(0), row, last))
             });
         }
+        true
     }
 }
 
@@ -1130,20 +1294,27 @@ enum StageKind {
     Close { last: bool },
 }
 
+/// A whole step's sub-steps for one pipelined pass ([`Simulation::pipelined_step`]).
+pub(crate) struct WholeStep {
+    /// Per sub-step, the wind's parameters and air velocity where its shares are renewed.
+    renewals: Vec<Option<(Wind, DVec3)>>,
+}
+
 /// The pipelined sub-step's plan, kept for the next sub-step: building it takes a pass over the rows'
 /// strips and a few allocations, serial work that the team's other threads would wait for.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PlanCache {
-    /// What the plan was made for: whether the wind is renewed, the sweeps, the parts, and how often the
-    /// cuts had moved ([`Progress::cuts_moved`]).
-    key: Option<(bool, u32, usize, u64)>,
+    /// What the plan was made for: in which sub-steps the wind is renewed, the sweeps, the parts, and
+    /// how often the cuts had moved ([`Progress::cuts_moved`]).
+    key: Option<(Vec<bool>, u32, usize, u64)>,
     plan: Option<PipelineStages>,
 }
 
-/// A grid sub-step as [`Pipeline`] stages: what each does, and the schedule.
+/// A grid's sub-steps as [`Pipeline`] stages: what each does and in which sub-step, and the schedule.
 #[derive(Clone, Debug)]
 struct PipelineStages {
     kinds: Vec<StageKind>,
+    substeps: Vec<usize>,
     pipeline: Pipeline,
 }
 
@@ -1157,13 +1328,13 @@ const COST_CELL: f64 = 2.4;
 const COST_PARTICLE: f64 = 2.6;
 
 impl PipelineStages {
-    /// The stages of a sub-step of `iterations` sweeps (the wind first when it is `renewed`), over a
-    /// grid of `columns` columns whose batches are `by_last_row` (the `middle` ones between the batches
-    /// along rows), in `parts` parts of about equal work; `None` when the parts are too short
-    /// ([`Pipeline::new`]).
+    /// The stages of one sub-step per element of `renewed`, one after another, each of `iterations`
+    /// sweeps (the wind first where it is `renewed`), over a grid of `columns` columns whose batches are
+    /// `by_last_row` (the `middle` ones between the batches along rows), in `parts` parts of about equal
+    /// work; `None` when the parts are too short ([`Pipeline::new`]).
     #[allow(clippy::too_many_arguments)]
     fn new(
-        renewed: bool,
+        renewed: &[bool],
         strips: &[Strip],
         by_last_row: &[(Vec<Range<usize>>, usize)],
         middle: Range<usize>,
@@ -1179,26 +1350,36 @@ impl PipelineStages {
             below,
             after_all,
         };
-        let (mut kinds, mut stages) = (Vec::new(), Vec::new());
-        if renewed {
-            // Cell row r reads particle rows r and r + 1 and writes its cells (counted as row r's).
-            kinds.push(StageKind::Wind);
-            stages.push(stage(rows - 1, 0, 1, None));
-        }
-        // Row r reads the cells of rows r − 1 and r.
-        let open = stages.len();
-        kinds.push(StageKind::Open);
-        stages.push(stage(rows, 1, 0, None));
-        for sweep in 0..iterations {
-            for batch in middle.clone() {
-                kinds.push(StageKind::Batch(batch));
-                stages.push(stage(rows, by_last_row[batch].1, 0, None));
+        let (mut kinds, mut substeps, mut stages) = (Vec::new(), Vec::new(), Vec::new());
+        for (substep, &renewed) in renewed.iter().enumerate() {
+            let open = stages.len() + usize::from(renewed);
+            let mut push = |kind, stage| {
+                kinds.push(kind);
+                substeps.push(substep);
+                stages.push(stage);
+            };
+            if renewed {
+                // Cell row r reads particle rows r and r + 1 and writes its cells (counted as row r's).
+                push(StageKind::Wind, stage(rows - 1, 0, 1, None));
             }
-            let last = sweep + 1 == iterations;
-            kinds.push(StageKind::Close { last });
-            // The attachments read every pin's gathered position.
-            stages.push(stage(rows, 0, 0, (sweep == 0).then_some(open)));
+            // Row r reads the cells of rows r − 1 and r.
+            push(StageKind::Open, stage(rows, 1, 0, None));
+            for sweep in 0..iterations {
+                for batch in middle.clone() {
+                    push(
+                        StageKind::Batch(batch),
+                        stage(rows, by_last_row[batch].1, 0, None),
+                    );
+                }
+                let last = sweep + 1 == iterations;
+                // The attachments read every pin's gathered position.
+                push(
+                    StageKind::Close { last },
+                    stage(rows, 0, 0, (sweep == 0).then_some(open)),
+                );
+            }
         }
+        let renewals = renewed.iter().filter(|&&r| r).count();
         let work: Vec<f64> = (0..rows)
             .map(|row| {
                 let constraints: f64 = by_last_row
@@ -1215,18 +1396,19 @@ impl PipelineStages {
                         cost * count as f64
                     })
                     .sum();
-                let cells = if renewed && row + 1 < rows {
-                    columns - 1
+                let cells = if row + 1 < rows {
+                    renewals * (columns - 1)
                 } else {
                     0
                 };
-                iterations as f64 * constraints
+                renewed.len() as f64
+                    * (iterations as f64 * constraints + COST_PARTICLE * columns as f64)
                     + COST_CELL * cells as f64
-                    + COST_PARTICLE * columns as f64
             })
             .collect();
         Some(PipelineStages {
             kinds,
+            substeps,
             pipeline: Pipeline::new(stages, &work, parts, progress)?,
         })
     }
@@ -1334,7 +1516,7 @@ mod tests {
     }
 
     /// The bits of `sim` after `frames` frames on a pool of `threads` threads, its pole turning a little
-    /// further every frame.
+    /// further and swaying every frame.
     fn turning_pole_bits(
         mut sim: Simulation,
         threads: usize,
@@ -1346,7 +1528,11 @@ mod tests {
             .unwrap();
         pool.install(|| {
             for frame in 0..frames {
-                let turn = glam::DAffine3::from_rotation_y(0.01 * frame as f64);
+                // Turning about the pole, which leaves the pins where they are, and swaying, which moves
+                // them (and so gives them a velocity in every sub-step).
+                let sway = DVec3::new(0.01, 0.0, 0.02) * (0.5 * frame as f64).sin();
+                let turn = glam::DAffine3::from_translation(sway)
+                    * glam::DAffine3::from_rotation_y(0.01 * frame as f64);
                 sim.move_pins(turn).unwrap();
                 sim.step(1.0 / 60.0).unwrap();
             }

@@ -143,7 +143,8 @@ pub struct Simulation {
     /// On a grid, how many rows at most lie between a particle and its anchor (0 without pins): how far
     /// ahead of a row's attachments the pins' positions must be known.
     pub(crate) tether_row_reach: usize,
-    /// Scratch: where each pinned particle is, in `pinned_indices` order, read by the attachments.
+    /// Scratch: where each pinned particle is, in `pinned_indices` order, read by the attachments; twice
+    /// over, one copy per sub-step parity (a whole step in one pass, `Simulation::pipelined_step`).
     pub(crate) tether_pin_positions: Vec<DVec3>,
     /// Where each pinned particle (in `pinned_indices` order) must be at the end of the next step.
     pub(crate) pin_targets: Vec<DVec3>,
@@ -379,7 +380,7 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_row_reach,
-            tether_pin_positions: vec![DVec3::ZERO; pinned_indices.len()],
+            tether_pin_positions: vec![DVec3::ZERO; 2 * pinned_indices.len()],
             pin_targets,
             pinned_indices,
             triangles: model.triangles,
@@ -461,7 +462,10 @@ impl Simulation {
         // team's passes are claimed chunk by chunk instead of split in equal parts.
         let claim = self.positions.len() >= TEAM_CLAIMS_FROM_PARTICLES;
         let divergence = team.lead(team_threads, claim, || {
-            for s in 0..substeps {
+            // A grid's position-based step as one pass of the team where it can go so; else (and
+            // always for the other methods) sub-step by sub-step.
+            let whole = split && self.pipelined_step(h, self.time, substeps);
+            for s in (0..substeps).filter(|_| !whole) {
                 let t = self.time + s as f64 * h;
                 // `wind.substeps_per_update` > 1: the held aerodynamic forces are renewed at the first
                 // force evaluation of every k-th sub-step (k = 1 renews them at every evaluation).
@@ -524,7 +528,7 @@ impl Simulation {
     }
 
     /// Gives pinned particles the velocity that carries them along their path during sub-step `s`.
-    fn prescribe_pins(&mut self, s: u32, substeps: u32, h: f64) {
+    pub(crate) fn prescribe_pins(&mut self, s: u32, substeps: u32, h: f64) {
         let split = self.params.method.is_position_based();
         for k in 0..self.pinned_indices.len() {
             let from = self.pin_position(k, s as f64 / substeps as f64);
@@ -567,14 +571,14 @@ impl Simulation {
     }
 
     /// Whether the wind exerts any force: it blows and there are triangles for it to act on.
-    fn wind_acts(&self) -> bool {
+    pub(crate) fn wind_acts(&self) -> bool {
         self.params.wind.is_active() && !self.triangles.is_empty()
     }
 
     /// Whether the triangles' corner shares of the aerodynamic force are due to be renewed at time `time`
     /// (s): if so, the wind's parameters and the air velocity (m/s) to renew them with, and they count as
     /// renewed from here on.
-    fn due_wind_renewal(&mut self, time: f64) -> Option<(Wind, DVec3)> {
+    pub(crate) fn due_wind_renewal(&mut self, time: f64) -> Option<(Wind, DVec3)> {
         let refresh =
             self.wind_acts() && (self.wind_stale || self.params.wind.updated_every_substep());
         refresh.then(|| {
