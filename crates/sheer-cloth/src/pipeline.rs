@@ -1,5 +1,6 @@
-//! A grid sub-step on a team of threads with one hand-off per sub-step: each thread runs every stage of
-//! the sub-step on its own rows, and waits for a neighbour only where their rows meet.
+//! A grid sub-step (or a whole step's sub-steps, one after another) on a team of threads in one
+//! hand-off: each thread runs every stage on its own rows, and waits for a neighbour only where their
+//! rows meet.
 //!
 //! Pass by pass, a small cloth's sub-step on two threads is a dozen passes of a few microseconds, each
 //! ended by a barrier at which the faster thread waits for the slower (on the default flag the team's
@@ -12,7 +13,11 @@
 //! Each part runs the stages in order on its own rows. Its *boundary* items are those that touch a row
 //! that a neighbouring part touches in any stage; the rest, its *interior*, touch nothing another part
 //! touches. A part runs stage `s` as: wait until each neighbour has finished its boundary items of stage
-//! `s − 1`; run its own boundary items of stage `s`; say so; run its interior items. Two items that
+//! `s − 1`; run its own boundary items of stage `s`; say so; run its interior items. If a neighbour has
+//! not got that far yet, it runs its interior items first (they depend on no other part) and waits
+//! after them: on the default flag on two threads the time spent waiting inside the pipeline fell by
+//! about a quarter (`perf record -e cpu-clock` of `fingerprint time 64x46 2 3000`: the waiting loop's
+//! samples 0.92 → 0.66 a frame). Two items that
 //! touch a common row and belong to different parts are boundary items of neighbouring parts (parts are
 //! at least `above + below` rows tall, so parts further apart share no row). If the item of stage `s`
 //! comes first in pass-by-pass order (`s < t`), the other part waits for this part's boundary of
@@ -146,16 +151,26 @@ impl Pipeline {
                     waited += progress.wait(q, 2 * k + 2);
                 }
             }
-            if s > 0 {
-                let neighbours = [p.checked_sub(1), (p + 1 < self.parts).then_some(p + 1)];
-                for q in neighbours.into_iter().flatten() {
+            let ([upper, lower], interior) = self.ranges(s, p);
+            let neighbours = [p.checked_sub(1), (p + 1 < self.parts).then_some(p + 1)];
+            let neighbours = neighbours.into_iter().flatten();
+            let ready = s == 0 || neighbours.clone().all(|q| progress.reached(q, 2 * s - 1));
+            if ready {
+                upper.chain(lower).for_each(|row| work(s, row));
+                progress.publish(p, 2 * s + 1);
+                interior.for_each(|row| work(s, row));
+            } else {
+                // A neighbour is behind: the interior first, which touches nothing another part
+                // touches (and shares no particle with the stage's other items), then the boundary.
+                #[cfg(test)]
+                progress.interior_first.fetch_add(1, Ordering::Relaxed);
+                interior.for_each(|row| work(s, row));
+                for q in neighbours {
                     waited += progress.wait(q, 2 * s - 1);
                 }
+                upper.chain(lower).for_each(|row| work(s, row));
+                progress.publish(p, 2 * s + 1);
             }
-            let ([upper, lower], interior) = self.ranges(s, p);
-            upper.chain(lower).for_each(|row| work(s, row));
-            progress.publish(p, 2 * s + 1);
-            interior.for_each(|row| work(s, row));
             progress.publish(p, 2 * s + 2);
         }
         let timing = &progress.timings[p];
@@ -227,6 +242,9 @@ pub(crate) struct Progress {
     lateness: Vec<f64>,
     /// How often a cut has moved.
     moves: u64,
+    /// How often a part ran a stage's interior before its boundary (its neighbour was behind).
+    #[cfg(test)]
+    interior_first: AtomicUsize,
 }
 
 impl Default for Progress {
@@ -239,6 +257,8 @@ impl Default for Progress {
             shifts: Vec::new(),
             lateness: Vec::new(),
             moves: 0,
+            #[cfg(test)]
+            interior_first: AtomicUsize::new(0),
         }
     }
 }
@@ -326,6 +346,11 @@ impl Progress {
         }
     }
 
+    /// Whether part `q` has reached `value` (acquiring what it wrote before, as [`wait`](Self::wait)).
+    fn reached(&self, q: usize, value: usize) -> bool {
+        self.counters[q].0.load(Ordering::Acquire) >= value
+    }
+
     fn publish(&self, p: usize, value: usize) {
         // Release: what the part wrote before is seen by whoever sees the value (`wait`'s acquire).
         self.counters[p].0.store(value, Ordering::Release);
@@ -376,7 +401,7 @@ mod tests {
 
     /// Runs every part of `pipeline` on its own thread and returns, per stage and row, the position of
     /// its item in the order in which the items ran.
-    fn run_logged(pipeline: &Pipeline) -> Vec<Vec<usize>> {
+    fn run_logged(pipeline: &Pipeline, slow_first_part: bool) -> (Vec<Vec<usize>>, usize) {
         let mut progress = Progress::default();
         progress.reset(pipeline.parts());
         let clock = AtomicUsize::new(0);
@@ -390,8 +415,11 @@ mod tests {
                 let (progress, clock, log) = (&progress, &clock, &log);
                 scope.spawn(move || {
                     pipeline.run_part(p, progress, |s, row| {
-                        // A little work, unevenly spread, so that the parts drift apart.
-                        for _ in 0..(row * 7 + s * 13) % 50 {
+                        // A little work, unevenly spread, so that the parts drift apart; with
+                        // `slow_first_part`, much more on the first part's rows in every third stage,
+                        // so that its neighbours find it behind.
+                        let slow = slow_first_part && p == 0 && s % 3 == 0;
+                        for _ in 0..(row * 7 + s * 13) % 50 + if slow { 3000 } else { 0 } {
                             std::hint::spin_loop();
                         }
                         let now = clock.fetch_add(1, Ordering::SeqCst);
@@ -400,7 +428,8 @@ mod tests {
                 });
             }
         });
-        log.into_iter()
+        let order = log
+            .into_iter()
             .map(|stage| {
                 stage
                     .into_iter()
@@ -411,7 +440,8 @@ mod tests {
                     })
                     .collect()
             })
-            .collect()
+            .collect();
+        (order, progress.interior_first.load(Ordering::Relaxed))
     }
 
     /// The rows item `row` of `stage` touches.
@@ -455,6 +485,8 @@ mod tests {
     /// like the solver's and for 2 to 4 parts over tall and short grids.
     #[test]
     fn items_that_share_a_row_run_in_stage_order() {
+        // Parts run a stage's interior before its boundary when a neighbour is behind: half of the
+        // runs slow the first part down so that this happens (asserted below).
         let solver_like = |rows: usize| {
             let stage = |items, above, below, after_all| Stage {
                 items,
@@ -480,8 +512,10 @@ mod tests {
             let pipeline = Pipeline::new(stages.clone(), &work, parts, &Progress::default())
                 .expect("tall enough parts");
             check_boundaries(&pipeline);
-            for _ in 0..20 {
-                let order = run_logged(&pipeline);
+            let mut interior_first = 0;
+            for run in 0..20 {
+                let (order, early) = run_logged(&pipeline, run % 2 == 1);
+                interior_first += early;
                 for (s, first) in stages.iter().enumerate() {
                     for (t, second) in stages.iter().enumerate().skip(s + 1) {
                         for r in 0..first.items {
@@ -500,6 +534,11 @@ mod tests {
                     }
                 }
             }
+            // Parts found a neighbour behind and ran a stage's interior first (checked above too).
+            assert!(
+                interior_first > 0,
+                "{rows} rows, {parts} parts: never interior first"
+            );
         }
     }
 
