@@ -272,6 +272,12 @@ struct Tethers<'a> {
     pin_positions: DisjointSlice<'a, DVec3>,
 }
 
+/// The pins (indices into `pinned_indices`, which ascends) among the particles `particles`.
+fn pins_among(pinned_indices: &[u32], particles: Range<usize>) -> Range<usize> {
+    let at = |i: usize| pinned_indices.partition_point(|&k| (k as usize) < i);
+    at(particles.start)..at(particles.end)
+}
+
 /// Per particle `i`, the index after the last of the particles `i, i + 1, …` anchored to the same pin
 /// as `i`: the end of its run, computed once for [`Tethers::apply`].
 pub(crate) fn anchor_run_ends(anchors: &[u32]) -> Vec<u32> {
@@ -327,8 +333,7 @@ impl<'a> Tethers<'a> {
 
     /// The pins (indices into `pinned_indices`) among the particles `particles`.
     fn pins_among(&self, particles: Range<usize>) -> Range<usize> {
-        let at = |i: usize| self.pinned_indices.partition_point(|&k| (k as usize) < i);
-        at(particles.start)..at(particles.end)
+        pins_among(self.pinned_indices, particles)
     }
 
     /// Gathers where the pinned particles among `particles` are now.
@@ -1130,16 +1135,11 @@ impl Simulation {
         // expressions: the same bits). No item of the sub-step runs on the row after this, and every item
         // of the next that reads the row runs after it.
         let substep_count = renewals.len();
-        let pins_of_row = |row: usize| {
-            let at = |i: usize| pinned_indices.partition_point(|&k| (k as usize) < i);
-            let particles = particles_of(row);
-            at(particles.start)..at(particles.end)
-        };
         let move_pins_of_row = |substep: usize, row: usize| {
             let pin_position = |k: usize, s: usize| {
                 pin_starts[k].lerp(pin_targets[k], s as f64 / substep_count as f64)
             };
-            for k in pins_of_row(row) {
+            for k in pins_among(pinned_indices, particles_of(row)) {
                 let i = pinned_indices[k] as usize;
                 let from = pin_position(k, substep + 1);
                 // SAFETY: the row is this part's while its end of the sub-step runs.
