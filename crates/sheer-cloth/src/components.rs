@@ -210,15 +210,6 @@ impl<'a> XyzMut<'a> {
             },
         )
     }
-
-    #[inline]
-    pub(crate) fn as_ref(&self) -> XyzRef<'_> {
-        XyzRef {
-            x: self.x,
-            y: self.y,
-            z: self.z,
-        }
-    }
 }
 
 /// [`DisjointSlice`] of each component: shared among threads that touch disjoint particles.
@@ -229,6 +220,19 @@ pub(crate) struct DisjointXyz<'a> {
 }
 
 impl DisjointXyz<'_> {
+    /// The first element of each component, and how many there are, for a caller that indexes them
+    /// itself.
+    pub(crate) fn pointers(&self) -> ([*mut f64; 3], usize) {
+        (
+            [
+                self.x.as_mut_ptr(),
+                self.y.as_mut_ptr(),
+                self.z.as_mut_ptr(),
+            ],
+            self.x.len(),
+        )
+    }
+
     /// # Safety
     /// No other thread may write particle `i` concurrently.
     #[inline]

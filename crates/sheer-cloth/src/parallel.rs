@@ -452,6 +452,15 @@ impl<'a, T: Copy> DisjointSlice<'a, T> {
         }
     }
 
+    /// The first element, for a caller that indexes the slice itself (see [`len`](Self::len)).
+    pub(crate) fn as_mut_ptr(&self) -> *mut T {
+        self.ptr
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
     /// # Safety
     /// No other thread may write index `i` concurrently.
     #[inline]

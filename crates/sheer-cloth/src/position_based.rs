@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use std::ops::Range;
 
 use crate::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
-use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strip};
+use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strips};
 use crate::grid_wind::{
     cells_around, split_cell_row, split_grid_triangle_forces, split_row_forces,
 };
@@ -994,41 +994,27 @@ impl Simulation {
             )
         });
         let tethers_of = |substep: usize| tethers[substep % 2].as_ref();
-        let project_one = |strip: &Strip| {
-            let family = family[family_index(strip.kind)];
-            let constraints = strip.first..strip.first + strip.count;
-            let (rest, inverse_denominators) = (
-                &rest_lengths[constraints.clone()],
-                &inverse_denominators[constraints.clone()],
-            );
-            // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
-            // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
-            // touch no row at once that another part touches (`Pipeline`), and the wavefront's
-            // concurrent parts and seams touch disjoint rows (`Wavefront::fits`); each strip owns its
-            // constraints' multipliers.
-            unsafe {
-                let lambdas = lambdas.slice_mut(constraints);
-                let project = if family.gamma != 0.0 {
-                    project_strip::<PBD, MULTIPLIERS, true>
-                } else {
-                    project_strip::<PBD, MULTIPLIERS, false>
-                };
-                project(
-                    strip,
-                    &positions,
-                    &previous,
-                    inverse_masses,
-                    rest,
-                    inverse_denominators,
-                    lambdas,
-                    family,
-                );
-            }
+        // SAFETY (callers): the strips of a batch touch disjoint particle ranges (checked by the
+        // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
+        // touch no row at once that another part touches (`Pipeline`), and the wavefront's concurrent
+        // parts and seams touch disjoint rows (`Wavefront::fits`); each strip owns its constraints'
+        // multipliers.
+        let project_these = |strips: &[Strip]| unsafe {
+            project_strips::<PBD, MULTIPLIERS>(
+                strips,
+                &positions,
+                &previous,
+                inverse_masses,
+                rest_lengths,
+                inverse_denominators,
+                &lambdas,
+                &family,
+            )
         };
         // The strips of batches `group` whose last row is `row`.
         let project_row = |group: Range<usize>, row: usize| {
             for (by_row, _) in &by_last_row[group] {
-                strips[by_row[row].clone()].iter().for_each(project_one);
+                project_these(&strips[by_row[row].clone()]);
             }
         };
         let particles_of = |row: usize| row * columns..(row + 1) * columns;
@@ -1155,26 +1141,35 @@ impl Simulation {
         if let Some(plan) = pipeline {
             progress.reset(plan.pipeline.parts());
             let shared_progress = &*progress;
-            let run_item = |stage: usize, row: usize| {
+            let run_items = |stage: usize, rows: Range<usize>| {
                 let substep = plan.substeps[stage];
                 match plan.kinds[stage] {
-                    StageKind::Wind => wind_cell_row(renewals[substep], row),
-                    StageKind::Open => {
+                    StageKind::Wind => rows.for_each(|row| wind_cell_row(renewals[substep], row)),
+                    StageKind::Open => rows.for_each(|row| {
                         predict_row(tethers_of(substep), row);
                         project_row(0..opening, row);
+                    }),
+                    // The batch's strips that end on these rows: consecutive, as the strips come
+                    // in ascending last rows (`last_rows_of_batch`), so in one call.
+                    StageKind::Batch(batch) => {
+                        let by_row = &by_last_row[batch].0[rows];
+                        let first = by_row.iter().find(|r| !r.is_empty());
+                        let last = by_row.iter().rfind(|r| !r.is_empty());
+                        if let (Some(first), Some(last)) = (first, last) {
+                            project_these(&strips[first.start..last.end]);
+                        }
                     }
-                    StageKind::Batch(batch) => project_row(batch..batch + 1, row),
-                    StageKind::Close { last } => {
+                    StageKind::Close { last } => rows.for_each(|row| {
                         close_row(tethers_of(substep), row, last);
                         if last && step.is_some() {
                             move_pins_of_row(substep, row);
                         }
-                    }
+                    }),
                 }
             };
             // One index per thread of the team (`team_in_equal_parts`), all at once.
             parts(plan.pipeline.parts(), parallel, 1, |part| {
-                part.for_each(|p| plan.pipeline.run_part(p, shared_progress, run_item))
+                part.for_each(|p| plan.pipeline.run_part(p, shared_progress, run_items))
             });
             progress.rebalance(&plan.pipeline);
             return true;
@@ -1221,7 +1216,7 @@ impl Simulation {
             for batch in middle.clone() {
                 let strips = &strips[batches[batch].clone()];
                 parts(strips.len(), parallel, 4, |range| {
-                    strips[range].iter().for_each(project_one)
+                    project_these(&strips[range])
                 });
             }
             let last = iteration + 1 == iterations;

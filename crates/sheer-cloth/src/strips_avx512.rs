@@ -14,14 +14,14 @@
 //!
 //! An apart strip needs no permutes (constraint `k` joins particle `k` of two runs), and its whole blocks
 //! vectorise well on their own; here it goes block by block with its last few constraints (seven of the
-//! 63 of every shear strip of the default flag) as one masked block, in one call ([`project_apart`]).
+//! 63 of every shear strip of the default flag) as one masked block, and a run of strips (a batch, or a
+//! batch's rows) goes in one call, through the whole cloth's arrays ([`project_apart_strips`]).
 //!
 //! The arithmetic ([`solve`]) is that of [`project`](crate::grid_constraints::project), operation for
 //! operation and without fused multiply–adds, so the results are the same bits (tested against it and
 //! against the loops in `strip_loops_match_the_one_constraint_projection_bit_for_bit`,
 //! `along_strips_of_every_length_match_the_loop_and_touch_nothing_beyond` and
-//! `apart_strips_of_every_length_match_the_projection_and_touch_nothing_beyond`; the simulator's
-//! fingerprint is unchanged).
+//! `apart_strips_of_every_length_match_the_projection_and_touch_nothing_beyond`).
 
 use std::arch::x86_64::*;
 
@@ -184,16 +184,6 @@ unsafe fn store_ends<const PARTIAL: bool>(
         store::<PARTIAL>(p, particles, 0, _mm512_permutex2var_pd(a, merge[0], b));
         store::<PARTIAL>(p, particles, 1, _mm512_permutex2var_pd(a, merge[1], b));
     }
-}
-
-/// Negation by the sign bit, as Rust's unary minus (`0 − x` would turn −0 into +0).
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn negate(x: __m512d) -> __m512d {
-    _mm512_castsi512_pd(_mm512_xor_si512(
-        _mm512_castpd_si512(x),
-        _mm512_set1_epi64(i64::MIN),
-    ))
 }
 
 /// `(x0·x1 + y0·y1) + z0·z1`, in glam's order.
@@ -385,151 +375,136 @@ unsafe fn solve<
         count,
     } = constraints;
     let zero = _mm512_setzero_pd();
-    let one = _mm512_set1_pd(1.0);
-    let scaled_compliance = _mm512_set1_pd(family.scaled_compliance);
-    let gamma = _mm512_set1_pd(family.gamma);
     let delta: [__m512d; 3] = std::array::from_fn(|c| _mm512_sub_pd(a[c], b[c]));
-    let length = _mm512_sqrt_pd(dot(delta, delta));
-    let inverse_length = _mm512_div_pd(one, length);
-    let gradient = delta.map(|d| _mm512_mul_pd(d, inverse_length));
-    let constraint = _mm512_sub_pd(length, rest);
+    let squared_length = dot(delta, delta);
+    let inverse_squared_length = _mm512_div_pd(_mm512_set1_pd(1.0), squared_length);
+    let length = _mm512_sqrt_pd(squared_length);
+    let elastic = _mm512_sub_pd(rest, length);
     // SAFETY (the multiplier loads and stores): by the caller's contract.
-    let correction = if PBD {
-        _mm512_mul_pd(negate(constraint), inverse_denominator)
+    let elastic = if !PBD && MULTIPLIERS {
+        let lambda = unsafe { load::<PARTIAL>(lambda_at, count, 0) };
+        _mm512_sub_pd(
+            elastic,
+            _mm512_mul_pd(_mm512_set1_pd(family.scaled_compliance), lambda),
+        )
     } else {
-        // As in `project`: without multipliers λ and its term are 0.
-        let elastic = if MULTIPLIERS {
-            let lambda = unsafe { load::<PARTIAL>(lambda_at, count, 0) };
-            _mm512_sub_pd(negate(constraint), _mm512_mul_pd(scaled_compliance, lambda))
-        } else {
-            negate(constraint)
-        };
-        if DAMPED {
-            let moved: [__m512d; 3] = std::array::from_fn(|c| {
-                _mm512_sub_pd(
-                    _mm512_sub_pd(a[c], previous_a[c]),
-                    _mm512_sub_pd(b[c], previous_b[c]),
-                )
-            });
-            let rate = dot(gradient, moved);
-            _mm512_mul_pd(
-                _mm512_sub_pd(elastic, _mm512_mul_pd(gamma, rate)),
-                inverse_denominator,
-            )
-        } else {
-            _mm512_mul_pd(elastic, inverse_denominator)
-        }
+        elastic
     };
-    // `project`'s `active`: `!=` is true for NaN, as the unordered comparison.
+    let numerator = if !PBD && DAMPED {
+        let moved: [__m512d; 3] = std::array::from_fn(|c| {
+            _mm512_sub_pd(
+                _mm512_sub_pd(a[c], previous_a[c]),
+                _mm512_sub_pd(b[c], previous_b[c]),
+            )
+        });
+        _mm512_sub_pd(
+            _mm512_mul_pd(elastic, length),
+            _mm512_mul_pd(_mm512_set1_pd(family.gamma), dot(delta, moved)),
+        )
+    } else {
+        _mm512_mul_pd(elastic, length)
+    };
+    // `project`'s `active`: `!=` is true for NaN, as the unordered comparison; `>=` false, as the
+    // ordered one.
     let active = _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(inverse_denominator, zero)
-        & _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(length, zero);
-    let correction = _mm512_maskz_mov_pd(active, correction);
-    let step = gradient.map(|g| _mm512_maskz_mov_pd(active, _mm512_mul_pd(correction, g)));
+        & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(squared_length, _mm512_set1_pd(f64::MIN_POSITIVE));
+    let coefficient = _mm512_maskz_mul_pd(
+        active,
+        numerator,
+        _mm512_mul_pd(inverse_denominator, inverse_squared_length),
+    );
     if MULTIPLIERS {
         unsafe {
-            let lambda = _mm512_add_pd(load::<PARTIAL>(lambda_at, count, 0), correction);
+            let change = _mm512_maskz_mul_pd(active, coefficient, length);
+            let lambda = _mm512_add_pd(load::<PARTIAL>(lambda_at, count, 0), change);
             store::<PARTIAL>(lambda_at, count, 0, lambda);
         }
     }
+    let step = delta.map(|d| _mm512_maskz_mul_pd(active, coefficient, d));
     [
         std::array::from_fn(|c| _mm512_add_pd(a[c], _mm512_mul_pd(w_a, step[c]))),
         std::array::from_fn(|c| _mm512_sub_pd(b[c], _mm512_mul_pd(w_b, step[c]))),
     ]
 }
 
-/// x, y and z of vector block `k` (vectors `8k..8k + 8`) of the first `n` vectors of `v`; with `PARTIAL`,
-/// lanes past them are zero and not read.
-///
-/// # Safety
-/// `n` vectors in `v`, and block `k` whole unless `PARTIAL`.
-#[target_feature(enable = "avx512f")]
-#[inline]
-unsafe fn load_xyz<const PARTIAL: bool>(v: XyzRef<'_>, n: usize, k: usize) -> [__m512d; 3] {
-    // SAFETY: `load` reads only the first `n` `f64` of each component.
-    unsafe {
-        [
-            load::<PARTIAL>(v.x.as_ptr(), n, k),
-            load::<PARTIAL>(v.y.as_ptr(), n, k),
-            load::<PARTIAL>(v.z.as_ptr(), n, k),
-        ]
-    }
+/// The whole cloth's arrays an apart strip reads and writes, as base pointers: each strip's ends and
+/// constraints are then offsets from them, two index registers for all of them. (With a pointer per end
+/// and component, eighteen in all, the loop kept some on the stack and shuffled the rest between
+/// registers every block: 35 of its 110 instructions.)
+#[derive(Clone, Copy)]
+pub(crate) struct ApartArrays {
+    /// Positions by component, and their length.
+    pub x: [*mut f64; 3],
+    pub particles: usize,
+    /// Start positions by component (read only when damped), as long.
+    pub previous: [*const f64; 3],
+    /// Inverse masses, as long.
+    pub inverse_masses: *const f64,
+    /// Per constraint, `constraints` long: rest lengths, inverted divisors and multipliers (read and
+    /// written only with multipliers).
+    pub rest_lengths: *const f64,
+    pub inverse_denominators: *const f64,
+    pub lambdas: *mut f64,
+    pub constraints: usize,
 }
 
-/// Projects an apart strip (constraint `k` joins `x_a[k]` and `x_b[k]`; the slices are those of
-/// `grid_constraints::project_apart`), eight constraints a block and the last few as one masked block,
-/// which touches nothing past the strip.
+/// Projects apart strips one after another in one call: strip `(a, b, first, count)` joins particles
+/// `a + k` and `b + k` by constraint `first + k`, for `k < count`, eight constraints a block, the last
+/// few as one masked block that touches nothing past the strip.
 ///
-/// Whole blocks had gone through the vectorised loop (`grid_constraints::project_apart`) and the tail
-/// through a masked block of its own: two calls per strip, each passing eighteen slices through the
-/// run-time dispatch of `by_cpu!`, which with the strip's own dispatch took about 8 % of the default
-/// flag's frame for strips of 63 or 64 constraints (`perf record -e cpu-clock` of `fingerprint time 64x46
-/// 1 3000`). (Before the tail was masked, the loop's scalar remainder cost a fifth of the apart strips'
-/// time.)
+/// A strip of the default flag is 63 or 64 constraints, eight blocks; one call per strip cost about a
+/// fifth of the strips' time (a stand-alone loop over 23 strips of 64 took 1.74–1.89 ns a constraint
+/// with a call each, 1.42–1.48 ns in one call): each call's set-up, and a chain of dependent operations
+/// that the next strip's blocks could not overlap until the call was over.
 ///
 /// # Safety
-/// The CPU must have AVX-512F.
+/// The CPU must have AVX-512F. The arrays valid for their lengths; `a + count ≤ b`; and no other thread
+/// may touch the strips' particles or constraints while this runs (reads of `previous` excepted).
 #[target_feature(enable = "avx512f")]
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn project_apart<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
-    x_a: XyzMut<'_>,
-    x_b: XyzMut<'_>,
-    previous_a: XyzRef<'_>,
-    previous_b: XyzRef<'_>,
-    inverse_mass_a: &[f64],
-    inverse_mass_b: &[f64],
-    rest_lengths: &[f64],
-    inverse_denominators: &[f64],
-    lambdas: &mut [f64],
+pub(crate) unsafe fn project_apart_strips<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+>(
+    arrays: ApartArrays,
+    strips: impl Iterator<Item = (usize, usize, usize, usize)>,
     family: FamilyConstants,
 ) {
-    let n = x_a.x.len();
-    assert!(x_a.y.len() == n && x_a.z.len() == n && x_b.x.len() == n);
-    assert!(x_b.y.len() == n && x_b.z.len() == n);
-    assert!(previous_a.x.len() == n && previous_a.y.len() == n && previous_a.z.len() == n);
-    assert!(previous_b.x.len() == n && previous_b.y.len() == n && previous_b.z.len() == n);
-    assert!(inverse_mass_a.len() == n && inverse_mass_b.len() == n);
-    assert!(rest_lengths.len() == n && inverse_denominators.len() == n && lambdas.len() == n);
-    let mut strip = ApartStrip {
-        x_a,
-        x_b,
-        previous_a,
-        previous_b,
-        inverse_mass_a,
-        inverse_mass_b,
-        rest_lengths,
-        inverse_denominators,
-        lambdas,
-        n,
-    };
-    for k in 0..n / BLOCK {
-        // SAFETY: the asserts above make the `n` particles and constraints valid in every slice, and
-        // block `k` is whole.
-        unsafe { apart_block::<PBD, MULTIPLIERS, DAMPED, false>(&mut strip, k, family) };
-    }
-    if !n.is_multiple_of(BLOCK) {
-        // SAFETY: as above; the masked block reads and writes only the first `n`.
-        unsafe { apart_block::<PBD, MULTIPLIERS, DAMPED, true>(&mut strip, n / BLOCK, family) };
+    for (a, b, first, count) in strips {
+        assert!(a + count <= b && b + count <= arrays.particles);
+        assert!(first + count <= arrays.constraints);
+        for k in 0..count / BLOCK {
+            // SAFETY: block `k` is whole and within the strip (the asserts above), exclusive by the
+            // caller's contract.
+            unsafe {
+                apart_block::<PBD, MULTIPLIERS, DAMPED, false>(
+                    &arrays,
+                    [a, b, first].map(|i| i + BLOCK * k),
+                    BLOCK,
+                    family,
+                )
+            };
+        }
+        if !count.is_multiple_of(BLOCK) {
+            let whole = count / BLOCK * BLOCK;
+            // SAFETY: as above; the masked block reads and writes only the strip's last constraints.
+            unsafe {
+                apart_block::<PBD, MULTIPLIERS, DAMPED, true>(
+                    &arrays,
+                    [a, b, first].map(|i| i + whole),
+                    count - whole,
+                    family,
+                )
+            };
+        }
     }
 }
 
-/// The slices of [`project_apart`], all `n` long.
-struct ApartStrip<'a, 'b> {
-    x_a: XyzMut<'a>,
-    x_b: XyzMut<'a>,
-    previous_a: XyzRef<'a>,
-    previous_b: XyzRef<'a>,
-    inverse_mass_a: &'a [f64],
-    inverse_mass_b: &'a [f64],
-    rest_lengths: &'a [f64],
-    inverse_denominators: &'a [f64],
-    lambdas: &'b mut [f64],
-    n: usize,
-}
-
-/// Projects block `k` of an apart strip (masked past its `n` constraints with `PARTIAL`).
+/// Projects the `count` (8 unless `PARTIAL`) constraints from `first` joining particles from `a` and
+/// from `b`.
 ///
 /// # Safety
-/// The slices of `strip` all `strip.n` long, and block `k` whole unless `PARTIAL`.
+/// Those particles and constraints valid in `arrays` and exclusive to this thread.
 #[target_feature(enable = "avx512f")]
 #[inline]
 unsafe fn apart_block<
@@ -538,41 +513,40 @@ unsafe fn apart_block<
     const DAMPED: bool,
     const PARTIAL: bool,
 >(
-    strip: &mut ApartStrip<'_, '_>,
-    k: usize,
+    arrays: &ApartArrays,
+    [a, b, first]: [usize; 3],
+    count: usize,
     family: FamilyConstants,
 ) {
-    let n = strip.n;
-    // SAFETY (the loads and stores): by the caller's contract.
+    // SAFETY (the loads and stores): by the caller's contract; `load` and `store` touch only the first
+    // `count` of each.
     unsafe {
-        let a = load_xyz::<PARTIAL>(strip.x_a.as_ref(), n, k);
-        let b = load_xyz::<PARTIAL>(strip.x_b.as_ref(), n, k);
+        let load_at = |p: *const f64, i: usize| load::<PARTIAL>(p.add(i), count, 0);
+        let x = arrays.x.map(|p| p.cast_const());
+        let ends = [x.map(|p| load_at(p, a)), x.map(|p| load_at(p, b))];
         let previous = if DAMPED {
             [
-                load_xyz::<PARTIAL>(strip.previous_a, n, k),
-                load_xyz::<PARTIAL>(strip.previous_b, n, k),
+                arrays.previous.map(|p| load_at(p, a)),
+                arrays.previous.map(|p| load_at(p, b)),
             ]
         } else {
             [[_mm512_setzero_pd(); 3]; 2]
         };
         let w = [
-            load::<PARTIAL>(strip.inverse_mass_a.as_ptr(), n, k),
-            load::<PARTIAL>(strip.inverse_mass_b.as_ptr(), n, k),
+            load_at(arrays.inverse_masses, a),
+            load_at(arrays.inverse_masses, b),
         ];
-        let first = BLOCK * k;
-        let count = n.saturating_sub(first).min(BLOCK);
         let constraints = Constraints {
-            rest: load::<PARTIAL>(strip.rest_lengths.as_ptr(), n, k),
-            inverse_denominator: load::<PARTIAL>(strip.inverse_denominators.as_ptr(), n, k),
-            lambdas: strip.lambdas.as_mut_ptr().add(first),
+            rest: load_at(arrays.rest_lengths, first),
+            inverse_denominator: load_at(arrays.inverse_denominators, first),
+            lambdas: arrays.lambdas.add(first),
             count,
         };
-        let [a, b] =
-            solve::<PBD, MULTIPLIERS, DAMPED, PARTIAL>([a, b], previous, w, constraints, family);
-        for (x, [x_x, x_y, x_z]) in [(&mut strip.x_a, a), (&mut strip.x_b, b)] {
-            store::<PARTIAL>(x.x.as_mut_ptr(), n, k, x_x);
-            store::<PARTIAL>(x.y.as_mut_ptr(), n, k, x_y);
-            store::<PARTIAL>(x.z.as_mut_ptr(), n, k, x_z);
+        let [moved_a, moved_b] =
+            solve::<PBD, MULTIPLIERS, DAMPED, PARTIAL>(ends, previous, w, constraints, family);
+        for c in 0..3 {
+            store::<PARTIAL>(arrays.x[c].add(a), count, 0, moved_a[c]);
+            store::<PARTIAL>(arrays.x[c].add(b), count, 0, moved_b[c]);
         }
     }
 }
