@@ -489,22 +489,26 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
     lambdas: &DisjointSlice<'_, f64>,
     families: &[FamilyConstants; 3],
 ) {
-    let apart = |strip: &Strip| match strip.layout {
-        Layout::Apart { b } => Some((strip.a, b, strip.first, strip.count)),
-        Layout::Along { .. } => None,
-    };
     let mut left = strips;
     while let Some(strip) = left.first() {
         let family = families[family_index(strip.kind)];
         #[cfg(target_arch = "x86_64")]
-        if apart(strip).is_some() && std::arch::is_x86_feature_detected!("avx512f") {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // The strips from here of the same family and layout (for an along strip, the same half).
             let run = left
                 .iter()
-                .take_while(|s| s.kind == strip.kind && apart(s).is_some())
+                .take_while(|s| {
+                    s.kind == strip.kind
+                        && match (s.layout, strip.layout) {
+                            (Layout::Apart { .. }, Layout::Apart { .. }) => true,
+                            (Layout::Along { half }, Layout::Along { half: h }) => half == h,
+                            _ => false,
+                        }
+                })
                 .count();
             let (this, next) = left.split_at(run);
             let (x, particles) = positions.pointers();
-            let arrays = crate::strips_avx512::ApartArrays {
+            let arrays = crate::strips_avx512::StripArrays {
                 x,
                 particles,
                 previous: previous.pointers().0.map(<*mut f64>::cast_const),
@@ -518,18 +522,10 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
                     .min(lambdas.len()),
             };
             assert!(previous.pointers().1 == particles && inverse_masses.len() == particles);
-            let ends = this.iter().filter_map(apart);
             // SAFETY: the CPU has AVX-512F (checked above); the arrays are valid for the lengths given,
             // an apart strip's runs do not overlap (`Layout::Apart`), and the rest is the caller's
             // contract.
-            unsafe {
-                use crate::strips_avx512::project_apart_strips;
-                if family.gamma != 0.0 {
-                    project_apart_strips::<PBD, MULTIPLIERS, true>(arrays, ends, family)
-                } else {
-                    project_apart_strips::<PBD, MULTIPLIERS, false>(arrays, ends, family)
-                }
-            };
+            unsafe { project_run::<PBD, MULTIPLIERS>(arrays, this, family) };
             left = next;
             continue;
         }
@@ -558,6 +554,50 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
             );
         }
         left = &left[1..];
+    }
+}
+
+/// A run of strips of one family and layout (see [`project_strips`]) in one AVX-512 call.
+///
+/// # Safety
+/// As [`strips_avx512::project_apart_strips`](crate::strips_avx512::project_apart_strips).
+#[cfg(target_arch = "x86_64")]
+unsafe fn project_run<const PBD: bool, const MULTIPLIERS: bool>(
+    arrays: crate::strips_avx512::StripArrays,
+    strips: &[Strip],
+    family: FamilyConstants,
+) {
+    use crate::strips_avx512::{project_along_strips, project_apart_strips};
+    let Some(strip) = strips.first() else {
+        return;
+    };
+    let apart = strips.iter().filter_map(|s| match s.layout {
+        Layout::Apart { b } => Some((s.a, b, s.first, s.count)),
+        Layout::Along { .. } => None,
+    });
+    let along = strips.iter().map(|s| (s.a, s.first, s.count));
+    // SAFETY: by the caller's contract.
+    unsafe {
+        match (strip.layout, family.gamma != 0.0) {
+            (Layout::Apart { .. }, true) => {
+                project_apart_strips::<PBD, MULTIPLIERS, true>(arrays, apart, family)
+            }
+            (Layout::Apart { .. }, false) => {
+                project_apart_strips::<PBD, MULTIPLIERS, false>(arrays, apart, family)
+            }
+            (Layout::Along { half: 1 }, true) => {
+                project_along_strips::<PBD, MULTIPLIERS, true, 1>(arrays, along, family)
+            }
+            (Layout::Along { half: 1 }, false) => {
+                project_along_strips::<PBD, MULTIPLIERS, false, 1>(arrays, along, family)
+            }
+            (Layout::Along { .. }, true) => {
+                project_along_strips::<PBD, MULTIPLIERS, true, 2>(arrays, along, family)
+            }
+            (Layout::Along { .. }, false) => {
+                project_along_strips::<PBD, MULTIPLIERS, false, 2>(arrays, along, family)
+            }
+        }
     }
 }
 
@@ -967,7 +1007,7 @@ mod tests {
         if STRIP && std::arch::is_x86_feature_detected!("avx512f") {
             let positions = split.disjoint();
             let constraints = rest.len().min(denominators.len()).min(lambdas.len());
-            let arrays = crate::strips_avx512::ApartArrays {
+            let arrays = crate::strips_avx512::StripArrays {
                 x: positions.pointers().0,
                 particles: 2 * n,
                 previous: [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
@@ -1454,6 +1494,157 @@ mod tests {
         check!(true, false, true, 2, 4);
     }
 
+    /// Whole batches of a grid through [`project_strips`] (with AVX-512, runs of strips in one call each)
+    /// give the bits of [`project`] constraint by constraint in strip order, multipliers included, with
+    /// damping on some families and off on another; on grids whose rows end in partial blocks.
+    #[test]
+    fn batches_in_one_call_match_the_one_constraint_projection() {
+        for (columns, rows) in [(37, 9), (64, 6), (12, 5)] {
+            let (shape, springs) = grid_springs(columns, rows);
+            let grid = GridConstraints::new(shape, &springs).expect("the grid's own springs");
+            let n = columns * rows;
+            let wobble =
+                |i: usize, k: usize| (((i * 7919 + k * 104_729) % 97) as f64 / 97.0 - 0.5) * 4e-3;
+            let x: Vec<DVec3> = (0..n)
+                .map(|i| {
+                    let (c, r) = ((i % columns) as f64, (i / columns) as f64);
+                    DVec3::new(
+                        0.02 * c + wobble(i, 1),
+                        -0.02 * r + wobble(i, 2),
+                        wobble(i, 3),
+                    )
+                })
+                .collect();
+            let previous: Vec<DVec3> = (0..n)
+                .map(|i| x[i] - DVec3::splat(1e-4 + wobble(i, 4) * 0.1))
+                .collect();
+            let w: Vec<f64> = (0..n)
+                .map(|i| {
+                    if i % columns == 0 {
+                        0.0
+                    } else {
+                        1e4 + i as f64
+                    }
+                })
+                .collect();
+            let constraints = grid.springs.len();
+            let rest = grid.rest_lengths.clone();
+            let denominators: Vec<f64> = (0..constraints)
+                .map(|k| 2e-5 * (1.0 + (k % 5) as f64 * 0.1))
+                .collect();
+            let lambdas0: Vec<f64> = (0..constraints).map(|k| 1e-6 * (k % 11) as f64).collect();
+            let families = [
+                FamilyConstants {
+                    scaled_compliance: 1e3,
+                    gamma: 0.3,
+                },
+                FamilyConstants {
+                    scaled_compliance: 1e4,
+                    gamma: 0.0,
+                },
+                FamilyConstants {
+                    scaled_compliance: 1e5,
+                    gamma: 0.1,
+                },
+            ];
+            macro_rules! check {
+                ($multipliers:literal) => {{
+                    let (mut expected, mut expected_lambdas) = (x.clone(), lambdas0.clone());
+                    for strip in &grid.strips {
+                        let family = families[family_index(strip.kind)];
+                        for k in 0..strip.count {
+                            let (a, b) = strip.ends(k);
+                            let c = strip.first + k;
+                            let (mut xa, mut xb) = (expected[a], expected[b]);
+                            let args = (
+                                previous[a],
+                                previous[b],
+                                w[a],
+                                w[b],
+                                rest[c],
+                                denominators[c],
+                            );
+                            if family.gamma != 0.0 {
+                                project::<false, $multipliers, true>(
+                                    &mut xa,
+                                    &mut xb,
+                                    args.0,
+                                    args.1,
+                                    args.2,
+                                    args.3,
+                                    args.4,
+                                    args.5,
+                                    &mut expected_lambdas[c],
+                                    family,
+                                );
+                            } else {
+                                project::<false, $multipliers, false>(
+                                    &mut xa,
+                                    &mut xb,
+                                    args.0,
+                                    args.1,
+                                    args.2,
+                                    args.3,
+                                    args.4,
+                                    args.5,
+                                    &mut expected_lambdas[c],
+                                    family,
+                                );
+                            }
+                            (expected[a], expected[b]) = (xa, xb);
+                        }
+                    }
+                    let (mut split, previous) = (Xyz::of(&x), Xyz::of(&previous));
+                    let mut previous = previous;
+                    let mut lambdas = lambdas0.clone();
+                    {
+                        let positions = split.disjoint();
+                        let previous = previous.disjoint();
+                        let lambdas = DisjointSlice::new(&mut lambdas);
+                        for batch in &grid.batches {
+                            // SAFETY: one thread.
+                            unsafe {
+                                project_strips::<false, $multipliers>(
+                                    &grid.strips[batch.clone()],
+                                    &positions,
+                                    &previous,
+                                    &w,
+                                    &rest,
+                                    &denominators,
+                                    &lambdas,
+                                    &families,
+                                )
+                            };
+                        }
+                    }
+                    let mut got = x.clone();
+                    split.join_into(&mut got);
+                    let bits = |v: &[DVec3]| {
+                        v.iter()
+                            .map(|p| p.to_array().map(f64::to_bits))
+                            .collect::<Vec<_>>()
+                    };
+                    assert_eq!(
+                        bits(&got),
+                        bits(&expected),
+                        "{columns}×{rows}, multipliers {}",
+                        $multipliers
+                    );
+                    assert_eq!(
+                        lambdas.iter().map(|l| l.to_bits()).collect::<Vec<_>>(),
+                        expected_lambdas
+                            .iter()
+                            .map(|l| l.to_bits())
+                            .collect::<Vec<_>>()
+                    );
+                    assert_ne!(bits(&got), bits(&x), "the particles moved");
+                }};
+            }
+            check!(false);
+            check!(true);
+        }
+    }
+
     /// Ends so close that `1/L²` would overflow count as coincident: nothing moves and nothing turns
     /// infinite or NaN; a little further apart they are pulled towards the rest length, finitely, and a
     /// stretched constraint's multiplier is the same as through the gradient `d/L` (within rounding).
@@ -1470,7 +1661,16 @@ mod tests {
             };
             let previous = (a - DVec3::splat(1e-6), b);
             project::<false, true, true>(
-                &mut a, &mut b, previous.0, previous.1, 2.0, 3.0, 0.02, 0.1, &mut lambda, family,
+                &mut a,
+                &mut b,
+                previous.0,
+                previous.1,
+                2.0,
+                3.0,
+                0.02,
+                0.1,
+                &mut lambda,
+                family,
             );
             (a, b, lambda)
         };
@@ -1481,7 +1681,10 @@ mod tests {
         }
         for gap in [1e-150, 1e-3, 0.05] {
             let (a, b, lambda) = project_at(gap);
-            assert!(a.is_finite() && b.is_finite() && lambda.is_finite(), "gap {gap:e}");
+            assert!(
+                a.is_finite() && b.is_finite() && lambda.is_finite(),
+                "gap {gap:e}"
+            );
             assert_ne!(a, start, "gap {gap:e}: moved");
         }
         // The multiplier's change against eq. (18)/(26) written with the unit gradient.
@@ -1492,7 +1695,10 @@ mod tests {
         let gradient = d / d.length();
         let moved = DVec3::splat(1e-6);
         let expected = (-(d.length() - rest) - 0.2 * gradient.dot(moved)) * inverse_denominator;
-        assert!((lambda - expected).abs() <= 1e-14 * expected.abs(), "{lambda} vs {expected}");
+        assert!(
+            (lambda - expected).abs() <= 1e-14 * expected.abs(),
+            "{lambda} vs {expected}"
+        );
     }
 
     /// Leaving the damping term out changes nothing when the family has none (γ = 0), and something

@@ -1011,10 +1011,22 @@ impl Simulation {
                 &family,
             )
         };
-        // The strips of batches `group` whose last row is `row`.
-        let project_row = |group: Range<usize>, row: usize| {
-            for (by_row, _) in &by_last_row[group] {
-                project_these(&strips[by_row[row].clone()]);
+        // The strips of batch `batch` whose last row is in `rows`: consecutive, as a batch's strips come
+        // in ascending last rows (`last_rows_of_batch`).
+        let strips_of_rows = |batch: usize, rows: Range<usize>| {
+            let by_row = &by_last_row[batch].0[rows];
+            let first = by_row.iter().find(|r| !r.is_empty());
+            let last = by_row.iter().rfind(|r| !r.is_empty());
+            match (first, last) {
+                (Some(first), Some(last)) => &strips[first.start..last.end],
+                _ => &strips[0..0],
+            }
+        };
+        // The strips of batches `group` whose last row is in `rows`, batch by batch, each batch's in one
+        // call.
+        let project_rows = |group: Range<usize>, rows: Range<usize>| {
+            for batch in group {
+                project_these(strips_of_rows(batch, rows.clone()));
             }
         };
         let particles_of = |row: usize| row * columns..(row + 1) * columns;
@@ -1087,13 +1099,15 @@ impl Simulation {
                 )
             };
         };
-        // The end of a sweep on row `row`: the closing batches, the attachments, on the last sweep the
-        // velocities, else the next sweep's opening batches.
-        let close_row = |tethers: Option<&Tethers<'_>>, row: usize, last: bool| {
-            project_row(closing.clone(), row);
-            end_row(tethers, row, last);
+        // The end of a sweep on `rows`: the closing batches, the attachments, on the last sweep the
+        // velocities, else the next sweep's opening batches. Each touches a row alone (the attachments
+        // read the pins' gathered positions besides), so batch by batch over the rows gives the bits
+        // of row by row.
+        let close_rows = |tethers: Option<&Tethers<'_>>, rows: Range<usize>, last: bool| {
+            project_rows(closing.clone(), rows.clone());
+            rows.clone().for_each(|row| end_row(tethers, row, last));
             if !last {
-                project_row(0..opening, row);
+                project_rows(0..opening, rows);
             }
         };
         // The wind's shares of cell row `row`, from particle rows `row` and `row + 1`.
@@ -1145,26 +1159,18 @@ impl Simulation {
                 let substep = plan.substeps[stage];
                 match plan.kinds[stage] {
                     StageKind::Wind => rows.for_each(|row| wind_cell_row(renewals[substep], row)),
-                    StageKind::Open => rows.for_each(|row| {
-                        predict_row(tethers_of(substep), row);
-                        project_row(0..opening, row);
-                    }),
-                    // The batch's strips that end on these rows: consecutive, as the strips come
-                    // in ascending last rows (`last_rows_of_batch`), so in one call.
-                    StageKind::Batch(batch) => {
-                        let by_row = &by_last_row[batch].0[rows];
-                        let first = by_row.iter().find(|r| !r.is_empty());
-                        let last = by_row.iter().rfind(|r| !r.is_empty());
-                        if let (Some(first), Some(last)) = (first, last) {
-                            project_these(&strips[first.start..last.end]);
+                    StageKind::Open => {
+                        rows.clone()
+                            .for_each(|row| predict_row(tethers_of(substep), row));
+                        project_rows(0..opening, rows);
+                    }
+                    StageKind::Batch(batch) => project_these(strips_of_rows(batch, rows)),
+                    StageKind::Close { last } => {
+                        close_rows(tethers_of(substep), rows.clone(), last);
+                        if last && step.is_some() {
+                            rows.for_each(|row| move_pins_of_row(substep, row));
                         }
                     }
-                    StageKind::Close { last } => rows.for_each(|row| {
-                        close_row(tethers_of(substep), row, last);
-                        if last && step.is_some() {
-                            move_pins_of_row(substep, row);
-                        }
-                    }),
                 }
             };
             // One index per thread of the team (`team_in_equal_parts`), all at once.
@@ -1178,11 +1184,9 @@ impl Simulation {
         // and the pins' gather, then, pass by pass, the opening batches, row by row.
         if !prediction_in_wavefront {
             parts(rows, parallel, row_grain, |rows| {
-                for row in rows {
-                    predict_row(tethers_of(0), row);
-                    if wavefront.is_none() {
-                        project_row(0..opening, row);
-                    }
+                rows.clone().for_each(|row| predict_row(tethers_of(0), row));
+                if wavefront.is_none() {
+                    project_rows(0..opening, rows);
                 }
             });
         }
@@ -1195,7 +1199,7 @@ impl Simulation {
                     }
                 }
                 WaveItem::Predict => predict_row(tethers_of(0), row),
-                WaveItem::Batch(batch) => project_row(batch..batch + 1, row),
+                WaveItem::Batch(batch) => project_these(strips_of_rows(batch, row..row + 1)),
                 WaveItem::End { last } => end_row(tethers_of(0), row, last),
             };
             // Each part's own strips need nothing across a cut, so the parts run at once; the seams
@@ -1223,7 +1227,7 @@ impl Simulation {
             // Last pass of the sweep: the closing batches, the attachments and, on the last sweep, the
             // velocities, else the next sweep's opening batches, row by row.
             parts(rows, parallel, row_grain, |rows| {
-                rows.for_each(|row| close_row(tethers_of(0), row, last))
+                close_rows(tethers_of(0), rows, last)
             });
         }
         true

@@ -212,12 +212,60 @@ pub(crate) unsafe fn project_along<
     const DAMPED: bool,
     const HALF: usize,
 >(
-    mut x: XyzMut<'_>,
+    x: XyzMut<'_>,
     previous: XyzRef<'_>,
     inverse_masses: &[f64],
     rest_lengths: &[f64],
     inverse_denominators: &[f64],
     lambdas: &mut [f64],
+    family: FamilyConstants,
+) {
+    let constraints = rest_lengths.len();
+    let n = 2 * constraints;
+    assert!(x.x.len() == n && x.y.len() == n && x.z.len() == n);
+    assert!(previous.x.len() == n && previous.y.len() == n && previous.z.len() == n);
+    assert!(inverse_masses.len() == n);
+    assert!(inverse_denominators.len() == constraints && lambdas.len() == constraints);
+    let arrays = StripArrays {
+        x: [x.x.as_mut_ptr(), x.y.as_mut_ptr(), x.z.as_mut_ptr()],
+        particles: n,
+        previous: [
+            previous.x.as_ptr(),
+            previous.y.as_ptr(),
+            previous.z.as_ptr(),
+        ],
+        inverse_masses: inverse_masses.as_ptr(),
+        rest_lengths: rest_lengths.as_ptr(),
+        inverse_denominators: inverse_denominators.as_ptr(),
+        lambdas: lambdas.as_mut_ptr(),
+        constraints,
+    };
+    // SAFETY: the CPU has AVX-512F (the caller's contract); the arrays are the slices, as long as
+    // asserted, and borrowed exclusively (the previous positions shared).
+    unsafe {
+        project_along_strips::<PBD, MULTIPLIERS, DAMPED, HALF>(
+            arrays,
+            [(0, 0, constraints)].into_iter(),
+            family,
+        )
+    };
+}
+
+/// Projects along strips one after another in one call: strip `(a, first, count)` runs from particle
+/// `a` with constraints `first..first + count` (`HALF` per chunk of `2·HALF` particles, as
+/// [`project_along`]); the strips of a batch's consecutive rows, for instance.
+///
+/// # Safety
+/// As [`project_apart_strips`].
+#[target_feature(enable = "avx512f")]
+pub(crate) unsafe fn project_along_strips<
+    const PBD: bool,
+    const MULTIPLIERS: bool,
+    const DAMPED: bool,
+    const HALF: usize,
+>(
+    arrays: StripArrays,
+    strips: impl Iterator<Item = (usize, usize, usize)>,
     family: FamilyConstants,
 ) {
     const {
@@ -226,104 +274,85 @@ pub(crate) unsafe fn project_along<
             "along strips pair neighbours 1 or 2 apart"
         )
     };
-    let constraints = rest_lengths.len();
-    assert!(
-        constraints.is_multiple_of(HALF),
-        "whole chunks of {HALF} constraints"
-    );
-    let n = 2 * constraints;
-    assert!(x.x.len() == n && x.y.len() == n && x.z.len() == n);
-    assert!(previous.x.len() == n && previous.y.len() == n && previous.z.len() == n);
-    assert!(inverse_masses.len() == n);
-    assert!(inverse_denominators.len() == constraints && lambdas.len() == constraints);
-    let whole = constraints / BLOCK * BLOCK;
-    for first in (0..whole).step_by(BLOCK) {
-        // SAFETY: the asserts above make the block's particles and constraints valid.
-        unsafe {
-            block::<PBD, MULTIPLIERS, DAMPED, HALF, false>(
-                &mut x,
-                previous,
-                inverse_masses,
-                rest_lengths,
-                inverse_denominators,
-                lambdas,
-                family,
-                first,
-                BLOCK,
-            )
-        };
-    }
-    if whole < constraints {
-        // SAFETY: as above, for the `constraints − whole` left.
-        unsafe {
-            block::<PBD, MULTIPLIERS, DAMPED, HALF, true>(
-                &mut x,
-                previous,
-                inverse_masses,
-                rest_lengths,
-                inverse_denominators,
-                lambdas,
-                family,
-                whole,
-                constraints - whole,
-            )
-        };
+    for (a, first, count) in strips {
+        assert!(
+            count.is_multiple_of(HALF),
+            "whole chunks of {HALF} constraints"
+        );
+        assert!(a + 2 * count <= arrays.particles && first + count <= arrays.constraints);
+        for k in 0..count / BLOCK {
+            // SAFETY: block `k` is whole and within the strip (the asserts above), exclusive by the
+            // caller's contract.
+            unsafe {
+                along_block::<PBD, MULTIPLIERS, DAMPED, HALF, false>(
+                    &arrays,
+                    a + 2 * BLOCK * k,
+                    first + BLOCK * k,
+                    BLOCK,
+                    family,
+                )
+            };
+        }
+        let whole = count / BLOCK * BLOCK;
+        if whole < count {
+            // SAFETY: as above, for the `count − whole` left.
+            unsafe {
+                along_block::<PBD, MULTIPLIERS, DAMPED, HALF, true>(
+                    &arrays,
+                    a + 2 * whole,
+                    first + whole,
+                    count - whole,
+                    family,
+                )
+            };
+        }
     }
 }
 
-/// Projects constraints `first..first + count` (`count` ≤ 8; below 8 only with `PARTIAL`) of
-/// [`project_along`]'s strip.
+/// Projects the `count` (8 unless `PARTIAL`) constraints from `first` of an along strip, on the `2·count`
+/// particles from `at`.
 ///
 /// # Safety
-/// The slices as `project` asserts them, and `first + count` at most the constraint count.
+/// Those particles and constraints valid in `arrays` and exclusive to this thread.
 #[target_feature(enable = "avx512f")]
 #[inline]
-#[allow(clippy::too_many_arguments)]
-unsafe fn block<
+unsafe fn along_block<
     const PBD: bool,
     const MULTIPLIERS: bool,
     const DAMPED: bool,
     const HALF: usize,
     const PARTIAL: bool,
 >(
-    x: &mut XyzMut<'_>,
-    previous: XyzRef<'_>,
-    inverse_masses: &[f64],
-    rest_lengths: &[f64],
-    inverse_denominators: &[f64],
-    lambdas: &mut [f64],
-    family: FamilyConstants,
+    arrays: &StripArrays,
+    at: usize,
     first: usize,
     count: usize,
+    family: FamilyConstants,
 ) {
     let tables = &TABLES[HALF - 1];
     let split = (index(&tables.split_ends.0), index(&tables.split_ends.1));
     let merge = [index(&tables.merge_ends[0]), index(&tables.merge_ends[1])];
     let particles = 2 * count;
-    let at = 2 * first;
     // SAFETY (the loads and stores below): by the caller's contract, `particles` particles and `count`
     // constraints from the block's first are valid.
     unsafe {
-        let [ax, bx] = load_ends::<PARTIAL>(x.x.as_ptr().add(at), particles, split);
-        let [ay, by] = load_ends::<PARTIAL>(x.y.as_ptr().add(at), particles, split);
-        let [az, bz] = load_ends::<PARTIAL>(x.z.as_ptr().add(at), particles, split);
-        let [w_a, w_b] = load_ends::<PARTIAL>(inverse_masses.as_ptr().add(at), particles, split);
+        let ends = |p: *const f64| load_ends::<PARTIAL>(p.add(at), particles, split);
+        let [ax, bx] = ends(arrays.x[0]);
+        let [ay, by] = ends(arrays.x[1]);
+        let [az, bz] = ends(arrays.x[2]);
+        let [w_a, w_b] = ends(arrays.inverse_masses);
         let previous_ends = if DAMPED {
-            let [pax, pbx] = load_ends::<PARTIAL>(previous.x.as_ptr().add(at), particles, split);
-            let [pay, pby] = load_ends::<PARTIAL>(previous.y.as_ptr().add(at), particles, split);
-            let [paz, pbz] = load_ends::<PARTIAL>(previous.z.as_ptr().add(at), particles, split);
+            let [pax, pbx] = ends(arrays.previous[0]);
+            let [pay, pby] = ends(arrays.previous[1]);
+            let [paz, pbz] = ends(arrays.previous[2]);
             [[pax, pay, paz], [pbx, pby, pbz]]
         } else {
             [[_mm512_setzero_pd(); 3]; 2]
         };
         let constraints = Constraints {
-            rest: load::<PARTIAL>(rest_lengths.as_ptr().add(first), count, 0),
-            inverse_denominator: load::<PARTIAL>(
-                inverse_denominators.as_ptr().add(first),
-                count,
-                0,
-            ),
-            lambdas: lambdas.as_mut_ptr().add(first),
+            rest: load::<PARTIAL>(arrays.rest_lengths.add(first), count, 0),
+            inverse_denominator: load::<PARTIAL>(arrays.inverse_denominators.add(first), count, 0),
+            lambdas: arrays.lambdas.add(first),
             count,
         };
         let [[ax, ay, az], [bx, by, bz]] = solve::<PBD, MULTIPLIERS, DAMPED, PARTIAL>(
@@ -333,9 +362,9 @@ unsafe fn block<
             constraints,
             family,
         );
-        store_ends::<PARTIAL>(x.x.as_mut_ptr().add(at), particles, [ax, bx], merge);
-        store_ends::<PARTIAL>(x.y.as_mut_ptr().add(at), particles, [ay, by], merge);
-        store_ends::<PARTIAL>(x.z.as_mut_ptr().add(at), particles, [az, bz], merge);
+        store_ends::<PARTIAL>(arrays.x[0].add(at), particles, [ax, bx], merge);
+        store_ends::<PARTIAL>(arrays.x[1].add(at), particles, [ay, by], merge);
+        store_ends::<PARTIAL>(arrays.x[2].add(at), particles, [az, bz], merge);
     }
 }
 
@@ -427,12 +456,12 @@ unsafe fn solve<
     ]
 }
 
-/// The whole cloth's arrays an apart strip reads and writes, as base pointers: each strip's ends and
-/// constraints are then offsets from them, two index registers for all of them. (With a pointer per end
+/// The whole cloth's arrays a strip reads and writes, as base pointers: each strip's ends and
+/// constraints are then offsets from them (for an apart strip, two index registers for all of them). (With a pointer per end
 /// and component, eighteen in all, the loop kept some on the stack and shuffled the rest between
 /// registers every block: 35 of its 110 instructions.)
 #[derive(Clone, Copy)]
-pub(crate) struct ApartArrays {
+pub(crate) struct StripArrays {
     /// Positions by component, and their length.
     pub x: [*mut f64; 3],
     pub particles: usize,
@@ -466,7 +495,7 @@ pub(crate) unsafe fn project_apart_strips<
     const MULTIPLIERS: bool,
     const DAMPED: bool,
 >(
-    arrays: ApartArrays,
+    arrays: StripArrays,
     strips: impl Iterator<Item = (usize, usize, usize, usize)>,
     family: FamilyConstants,
 ) {
@@ -513,7 +542,7 @@ unsafe fn apart_block<
     const DAMPED: bool,
     const PARTIAL: bool,
 >(
-    arrays: &ApartArrays,
+    arrays: &StripArrays,
     [a, b, first]: [usize; 3],
     count: usize,
     family: FamilyConstants,
