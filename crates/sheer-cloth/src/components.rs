@@ -112,6 +112,7 @@ impl Xyz {
         }
     }
 
+    #[cfg(test)]
     pub(crate) fn as_mut(&mut self) -> XyzMut<'_> {
         XyzMut {
             x: &mut self.x,

@@ -14,7 +14,7 @@
 //! triangles in ascending order, as the general path's scatter does.
 //!
 //! The position-based methods keep their state split by component (`components.rs`), and have their own
-//! copies of these passes ([`split_cell_rows`], [`split_row_forces`]): the same arithmetic on each
+//! copies of these passes ([`split_cell_rows`], [`predict_row_with_forces`]): the same arithmetic on each
 //! component, into shares split the same way ([`SplitShares`]), so that neither the cells nor the sums
 //! transpose 24-byte vectors with permutes (the sums had been almost nothing but permutes: 162 of 216
 //! vector operations, `perf annotate`). Tested bit for bit against the joined passes.
@@ -506,63 +506,8 @@ fn split_cell_block(
     shares
 }
 
-/// [`row_forces`] on the split state: the body force of the row, plus, with `cells`, the split shares
-/// (`[first, second]` of the cell rows above and below, [`cells_around`]) in ascending triangle order,
-/// into `forces`. Component by component: each component's sum is the same sequence of additions as the
-/// joined sum's, so the same bits.
-pub(crate) fn split_row_forces(
-    cells: Option<[Option<[XyzRef<'_>; 2]>; 2]>,
-    masses: &[f64],
-    velocities: XyzRef<'_>,
-    gravity: DVec3,
-    air_damping: f64,
-    forces: XyzMut<'_>,
-) {
-    let XyzMut { x, y, z } = forces;
-    fn component<'a>(shares: Option<[XyzRef<'a>; 2]>, c: usize) -> Option<[&'a [f64]; 2]> {
-        shares.map(|pair| pair.map(|s| [s.x, s.y, s.z][c]))
-    }
-    let velocity = [velocities.x, velocities.y, velocities.z];
-    let gravity = gravity.to_array();
-    for (c, forces) in [x, y, z].into_iter().enumerate() {
-        let Some([above, below]) = cells else {
-            body_force_component(masses, velocity[c], gravity[c], air_damping, forces);
-            continue;
-        };
-        let ([above_first, above_second], [below_first, below_second]) = (
-            component(above, c).map_or([None; 2], |pair| pair.map(Some)),
-            component(below, c).map_or([None; 2], |pair| pair.map(Some)),
-        );
-        body_force_and_shares_component(
-            masses,
-            velocity[c],
-            gravity[c],
-            air_damping,
-            above_first,
-            above_second,
-            below_first,
-            below_second,
-            forces,
-        );
-    }
-}
-
-by_cpu! {
-    /// One component of [`body_force_row`]: `forces[i] = m_i (g − c v_i)`.
-    fn body_force_component(
-        masses: &[f64],
-        velocities: &[f64],
-        gravity: f64,
-        air_damping: f64,
-        forces: &mut [f64],
-    ) {
-        let n = forces.len();
-        let (masses, velocities) = (&masses[..n], &velocities[..n]);
-        for i in 0..n {
-            forces[i] = masses[i] * (gravity - air_damping * velocities[i]);
-        }
-    }
-}
+/// One component of a cell row's `[first, second]` shares, `None` where there is no such row.
+type CellRowShares<'a> = [Option<&'a [f64]>; 2];
 
 /// One component of [`add_at_particle`]: `force` plus the `[first, second]` shares of the cell rows
 /// above and below. Summed in a local and returned rather than added into the force in place: through
@@ -572,8 +517,8 @@ by_cpu! {
 fn add_component_at_particle(
     force: f64,
     column: usize,
-    [above_first, above_second]: [Option<&[f64]>; 2],
-    [below_first, below_second]: [Option<&[f64]>; 2],
+    [above_first, above_second]: CellRowShares<'_>,
+    [below_first, below_second]: CellRowShares<'_>,
     has_left: bool,
     has_right: bool,
 ) -> f64 {
@@ -599,38 +544,129 @@ fn add_component_at_particle(
     force
 }
 
+/// The prediction of one row with its forces summed on the way (the joined [`row_forces`] followed by
+/// the prediction, `position_based::predict_components`, in one loop per component: the same operations
+/// in the same order, so the same bits): the row's body force plus, with `cells`, the wind's shares of the
+/// cell rows above and below; then `v += h w f`, the start position kept, `x += h v`.
+///
+/// Summed into a row of scratch and predicted from it in a second loop, the sums had cost 11 % of the
+/// default flag's frame and the prediction 6 %, plus the scratch's thread-local look-up (`perf record -e
+/// cpu-clock` of `fingerprint time 64x46 1 3000`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn predict_row_with_forces(
+    h: f64,
+    cells: Option<[Option<[XyzRef<'_>; 2]>; 2]>,
+    masses: &[f64],
+    inverse_masses: &[f64],
+    gravity: DVec3,
+    air_damping: f64,
+    positions: XyzMut<'_>,
+    velocities: XyzMut<'_>,
+    previous: XyzMut<'_>,
+) {
+    fn component<'a>(shares: Option<[XyzRef<'a>; 2]>, c: usize) -> [Option<&'a [f64]>; 2] {
+        shares.map_or([None; 2], |pair| pair.map(|s| Some([s.x, s.y, s.z][c])))
+    }
+    let [above, below] = cells.unwrap_or([None, None]);
+    let XyzMut {
+        x: x_x,
+        y: x_y,
+        z: x_z,
+    } = positions;
+    let XyzMut {
+        x: v_x,
+        y: v_y,
+        z: v_z,
+    } = velocities;
+    let XyzMut {
+        x: p_x,
+        y: p_y,
+        z: p_z,
+    } = previous;
+    let gravity = gravity.to_array();
+    for (c, (x, v, p)) in [(x_x, v_x, p_x), (x_y, v_y, p_y), (x_z, v_z, p_z)]
+        .into_iter()
+        .enumerate()
+    {
+        let [above_first, above_second] = component(above, c);
+        let [below_first, below_second] = component(below, c);
+        predict_component_with_forces(
+            h,
+            masses,
+            inverse_masses,
+            gravity[c],
+            air_damping,
+            above_first,
+            above_second,
+            below_first,
+            below_second,
+            x,
+            v,
+            p,
+        );
+    }
+}
+
 by_cpu! {
-    /// One component of [`body_force_row`] followed by [`add_to_particle_row`] in one loop (the same
-    /// operations in the same order: the same bits), the end particles apart; each cell row's shares as
-    /// two separate slices (which the compiler knows do not overlap `forces`), `None` where there is no
-    /// such row.
-    fn body_force_and_shares_component(
+    /// One component of [`predict_row_with_forces`]: the force as [`row_forces`] sums it (component by
+    /// component), then the prediction as `predict_components` makes it.
+    fn predict_component_with_forces(
+        h: f64,
         masses: &[f64],
-        velocities: &[f64],
+        inverse_masses: &[f64],
         gravity: f64,
         air_damping: f64,
         above_first: Option<&[f64]>,
         above_second: Option<&[f64]>,
         below_first: Option<&[f64]>,
         below_second: Option<&[f64]>,
-        forces: &mut [f64],
+        x: &mut [f64],
+        v: &mut [f64],
+        previous: &mut [f64],
     ) {
-        let n = forces.len();
+        let n = x.len();
         let last = n - 1;
-        let (masses, velocities) = (&masses[..n], &velocities[..n]);
+        let (masses, inverse_masses) = (&masses[..n], &inverse_masses[..n]);
+        let (v, previous) = (&mut v[..n], &mut previous[..n]);
         // Rows of `last` cells: with that length known, the interior loop needs no bounds checks.
         let above = [above_first.map(|s| &s[..last]), above_second.map(|s| &s[..last])];
         let below = [below_first.map(|s| &s[..last]), below_second.map(|s| &s[..last])];
-        // As `body_force_component`.
-        let body = |i: usize| masses[i] * (gravity - air_damping * velocities[i]);
-        forces[0] = add_component_at_particle(body(0), 0, above, below, false, true);
-        #[allow(clippy::needless_range_loop)]
-        for column in 1..last {
-            forces[column] =
-                add_component_at_particle(body(column), column, above, below, true, true);
+        let (x, previous) = (&mut x[..n], &mut previous[..n]);
+        // Through a function rather than a closure, which the compiler called per particle.
+        let cells = (above, below);
+        let ends = (h, gravity, air_damping);
+        predict_particle(0, [false, true], ends, masses, inverse_masses, cells, x, v, previous);
+        for i in 1..last {
+            predict_particle(i, [true, true], ends, masses, inverse_masses, cells, x, v, previous);
         }
-        forces[last] = add_component_at_particle(body(last), last, above, below, true, false);
+        predict_particle(last, [true, false], ends, masses, inverse_masses, cells, x, v, previous);
     }
+}
+
+/// Particle `i` of [`predict_component_with_forces`]: its force (its body force, then its shares, as
+/// [`row_forces`] adds them, `[has_left, has_right]` saying which cells it has), then
+/// its prediction as `predict_components` makes it (`h * w * f`: glam's scalar times vector, component
+/// by component): the start position kept, `v += h w f`, `x += h v`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn predict_particle(
+    i: usize,
+    [has_left, has_right]: [bool; 2],
+    (h, gravity, air_damping): (f64, f64, f64),
+    masses: &[f64],
+    inverse_masses: &[f64],
+    (above, below): (CellRowShares<'_>, CellRowShares<'_>),
+    x: &mut [f64],
+    v: &mut [f64],
+    previous: &mut [f64],
+) {
+    let body = masses[i] * (gravity - air_damping * v[i]);
+    let force = add_component_at_particle(body, i, above, below, has_left, has_right);
+    let start = x[i];
+    previous[i] = start;
+    let velocity = v[i] + h * inverse_masses[i] * force;
+    v[i] = velocity;
+    x[i] = start + h * velocity;
 }
 
 #[cfg(test)]
@@ -748,24 +784,41 @@ mod tests {
                         0.3,
                         &mut want,
                     );
-                    let mut got = Xyz::zeros(shape.columns);
-                    split_row_forces(
+                    // The prediction from those forces, as the joined path makes it.
+                    let (h, inverse_masses) =
+                        (1e-3, masses.iter().map(|m| 1.0 / m).collect::<Vec<_>>());
+                    let start = &positions[particles.clone()];
+                    let mut velocity = velocities[particles.clone()].to_vec();
+                    let mut predicted = start.to_vec();
+                    for (k, f) in want.iter().enumerate() {
+                        velocity[k] += h * inverse_masses[particles.start + k] * *f;
+                        predicted[k] = start[k] + h * velocity[k];
+                    }
+                    let (mut x, mut v) = (Xyz::of(start), Xyz::of(&velocities[particles.clone()]));
+                    let mut kept = Xyz::zeros(shape.columns);
+                    predict_row_with_forces(
+                        h,
                         with_cells.then(|| cells_around(shape.rows, row, split_row)),
                         &masses[particles.clone()],
-                        split_v.as_ref().range(particles.clone()),
+                        &inverse_masses[particles.clone()],
                         gravity,
                         0.3,
-                        got.as_mut(),
+                        x.as_mut(),
+                        v.as_mut(),
+                        kept.as_mut(),
                     );
+                    let bits = |v: &[DVec3]| {
+                        v.iter()
+                            .map(|f| f.to_array().map(f64::to_bits))
+                            .collect::<Vec<_>>()
+                    };
+                    let case = format!("row {row}, cells {with_cells}");
+                    assert_eq!(bits(&x.to_vec3s()), bits(&predicted), "{case}: positions");
+                    assert_eq!(bits(&v.to_vec3s()), bits(&velocity), "{case}: velocities");
                     assert_eq!(
-                        got.to_vec3s()
-                            .iter()
-                            .map(|f| f.to_array().map(f64::to_bits))
-                            .collect::<Vec<_>>(),
-                        want.iter()
-                            .map(|f| f.to_array().map(f64::to_bits))
-                            .collect::<Vec<_>>(),
-                        "row {row}, cells {with_cells}"
+                        bits(&kept.to_vec3s()),
+                        bits(start),
+                        "{case}: start positions"
                     );
                 }
             }

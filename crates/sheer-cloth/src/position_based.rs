@@ -24,7 +24,7 @@ use std::ops::Range;
 use crate::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
 use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strips};
 use crate::grid_wind::{
-    cells_around, split_cell_row, split_grid_triangle_forces, split_row_forces,
+    cells_around, predict_row_with_forces, split_cell_row, split_grid_triangle_forces,
 };
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts};
@@ -63,7 +63,8 @@ const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
 const WAVEFRONT_ROWS_PER_DEPTH: usize = 10;
 
 thread_local! {
-    /// One row of a grid's forces (N), summed and used by the prediction of that row on this thread.
+    /// One row of a grid's forces (N), copied from the cloth's and used by the prediction of that row on
+    /// this thread (when the rows do not sum their forces themselves).
     static ROW_FORCES: std::cell::RefCell<Xyz> = std::cell::RefCell::new(Xyz::default());
 }
 
@@ -1050,31 +1051,35 @@ impl Simulation {
                         previous.slice_mut(range.clone()),
                     )
                 };
-                // Summed (or copied) into this thread's row of scratch, which stays in its cache, rather
-                // than into `forces`: on a large cloth that array's writes and reads went to memory.
-                ROW_FORCES.with_borrow_mut(|row_forces| {
-                    if row_forces.len() != columns {
-                        *row_forces = Xyz::zeros(columns);
-                    }
-                    if row_forces_on {
-                        let cell_row = |r: usize| {
-                            let cells = r * cells_per_row..(r + 1) * cells_per_row;
-                            [first_cells.slice(cells.clone()), second_cells.slice(cells)]
-                        };
-                        let around = shares_on.then(|| cells_around(rows, row, cell_row));
-                        split_row_forces(
-                            around,
-                            &masses[range.clone()],
-                            velocities.slice(range.clone()),
-                            gravity,
-                            air_damping,
-                            row_forces.as_mut(),
-                        );
-                    } else {
+                if row_forces_on {
+                    // Summed on the way: not into `forces`, whose writes and reads went to memory on a
+                    // large cloth, nor into a row of scratch read back by a second loop.
+                    let cell_row = |r: usize| {
+                        let cells = r * cells_per_row..(r + 1) * cells_per_row;
+                        [first_cells.slice(cells.clone()), second_cells.slice(cells)]
+                    };
+                    let around = shares_on.then(|| cells_around(rows, row, cell_row));
+                    predict_row_with_forces(
+                        h,
+                        around,
+                        &masses[range.clone()],
+                        &inverse_masses[range.clone()],
+                        gravity,
+                        air_damping,
+                        positions.slice_mut(range.clone()),
+                        velocities.slice_mut(range.clone()),
+                        previous.slice_mut(range.clone()),
+                    );
+                } else {
+                    // Copied into this thread's row of scratch, split by component.
+                    ROW_FORCES.with_borrow_mut(|row_forces| {
+                        if row_forces.len() != columns {
+                            *row_forces = Xyz::zeros(columns);
+                        }
                         row_forces.split_from(forces.slice(range.clone()));
-                    }
-                    predict(row_forces.as_ref());
-                });
+                        predict(row_forces.as_ref());
+                    });
+                }
             };
             if let Some(tethers) = tethers {
                 // SAFETY: no attachment reads the row's pins meanwhile: a pass runs none, the

@@ -629,7 +629,7 @@ impl Simulation {
     }
 
     /// For the position-based solvers on a grid, which sum each row's forces in their first pass over
-    /// the rows ([`split_row_forces`](crate::grid_wind::split_row_forces)): what the rows add to the body force
+    /// the rows ([`predict_row_with_forces`](crate::grid_wind::predict_row_with_forces)): what the rows add to the body force
     /// ([`RowForces`]), or, when the triangles are not the grid's own, `None` after summing the forces
     /// into `self.forces` ([`compute_forces`](Simulation::compute_forces)).
     pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<RowForces> {
