@@ -469,11 +469,12 @@ pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bo
 /// Projects `strips` one after another (the strips of a batch, or of a batch's rows), on the whole
 /// cloth's arrays: `positions`, `previous` (start positions) and `inverse_masses` per particle,
 /// `rest_lengths`, `inverse_denominators` and `lambdas` per constraint, and each family's constants.
-/// With AVX-512 each run of apart strips of one family goes in one call
-/// ([`strips_avx512::project_apart_strips`](crate::strips_avx512::project_apart_strips)); the other
-/// strips, and all without AVX-512, one by one through [`project_strip`]. The same bits either way
-/// (`apart_strips_of_every_length_match_the_projection_and_touch_nothing_beyond`, and the solver's
-/// tests on both paths).
+/// With AVX-512 each run of strips of one family and layout goes in one call
+/// ([`strips_avx512::project_apart_strips`](crate::strips_avx512::project_apart_strips),
+/// [`strips_avx512::project_along_strips`](crate::strips_avx512::project_along_strips)); without it,
+/// one strip at a time through [`project_strip`]. The same bits either way
+/// (`batches_in_one_call_match_the_one_constraint_projection`, the strip tests at every length, and the
+/// solver's tests on both paths).
 ///
 /// # Safety
 /// No other thread may touch the strips' particles in `positions`, write them in `previous`, or touch
