@@ -1557,46 +1557,27 @@ mod tests {
                             let (a, b) = strip.ends(k);
                             let c = strip.first + k;
                             let (mut xa, mut xb) = (expected[a], expected[b]);
-                            let args = (
+                            let project_one = if family.gamma != 0.0 {
+                                project::<false, $multipliers, true>
+                            } else {
+                                project::<false, $multipliers, false>
+                            };
+                            project_one(
+                                &mut xa,
+                                &mut xb,
                                 previous[a],
                                 previous[b],
                                 w[a],
                                 w[b],
                                 rest[c],
                                 denominators[c],
+                                &mut expected_lambdas[c],
+                                family,
                             );
-                            if family.gamma != 0.0 {
-                                project::<false, $multipliers, true>(
-                                    &mut xa,
-                                    &mut xb,
-                                    args.0,
-                                    args.1,
-                                    args.2,
-                                    args.3,
-                                    args.4,
-                                    args.5,
-                                    &mut expected_lambdas[c],
-                                    family,
-                                );
-                            } else {
-                                project::<false, $multipliers, false>(
-                                    &mut xa,
-                                    &mut xb,
-                                    args.0,
-                                    args.1,
-                                    args.2,
-                                    args.3,
-                                    args.4,
-                                    args.5,
-                                    &mut expected_lambdas[c],
-                                    family,
-                                );
-                            }
                             (expected[a], expected[b]) = (xa, xb);
                         }
                     }
-                    let (mut split, previous) = (Xyz::of(&x), Xyz::of(&previous));
-                    let mut previous = previous;
+                    let (mut split, mut previous) = (Xyz::of(&x), Xyz::of(&previous));
                     let mut lambdas = lambdas0.clone();
                     {
                         let positions = split.disjoint();
