@@ -363,11 +363,14 @@ pub(crate) fn split_grid_triangle_forces(
     });
 }
 
-/// One row of [`split_grid_triangle_forces`], for a caller that shares the rows out itself: the shares
-/// of a cell row from the two particle rows it joins (`positions` and `velocities` hold those two rows),
-/// into that row's cells of `first` and `second`.
-pub(crate) fn split_cell_row(
+/// Consecutive rows of [`split_grid_triangle_forces`], for a caller that shares the rows out itself: the
+/// shares of `cell_rows` cell rows from the `cell_rows + 1` particle rows they join (`positions` and
+/// `velocities` hold those rows), into those rows' cells of `first` and `second`. In one call rather than
+/// one a row: the run-time dispatch and the set-up of each call had been paid per row.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn split_cell_run(
     columns: usize,
+    cell_rows: usize,
     wind: &Wind,
     air_velocity: DVec3,
     positions: XyzRef<'_>,
@@ -381,7 +384,7 @@ pub(crate) fn split_cell_row(
         air_velocity,
         positions,
         velocities,
-        0..1,
+        0..cell_rows,
         first,
         second,
     );

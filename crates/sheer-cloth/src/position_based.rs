@@ -24,7 +24,7 @@ use std::ops::Range;
 use crate::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
 use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strips};
 use crate::grid_wind::{
-    cells_around, predict_row_with_forces, split_cell_row, split_grid_triangle_forces,
+    cells_around, predict_row_with_forces, split_cell_run, split_grid_triangle_forces,
 };
 use crate::model::Spring;
 use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts};
@@ -1116,19 +1116,21 @@ impl Simulation {
             }
         };
         // The wind's shares of cell row `row`, from particle rows `row` and `row + 1`.
-        let wind_cell_row = |renewal: Option<(Wind, DVec3)>, row: usize| {
+        // The wind's shares of cell rows `rows`, from particle rows `rows.start..=rows.end`.
+        let wind_cell_rows = |renewal: Option<(Wind, DVec3)>, rows: Range<usize>| {
             let (wind, air_velocity) = renewal.expect("a wind item renews the shares");
-            let rows_of_cell = row * columns..(row + 2) * columns;
-            // SAFETY: the pipeline and the wavefront run cell row `row` on one part, while no part
-            // writes particle rows `row` and `row + 1` or reads the cell row.
+            let particle_rows = rows.start * columns..(rows.end + 1) * columns;
+            // SAFETY: the pipeline and the wavefront run a cell row on one part, while no part writes
+            // the particle rows it joins or reads the cell row.
             unsafe {
-                let cells = row * cells_per_row..(row + 1) * cells_per_row;
-                split_cell_row(
+                let cells = rows.start * cells_per_row..rows.end * cells_per_row;
+                split_cell_run(
                     columns,
+                    rows.len(),
                     &wind,
                     air_velocity,
-                    positions.slice(rows_of_cell.clone()),
-                    velocities.slice(rows_of_cell),
+                    positions.slice(particle_rows.clone()),
+                    velocities.slice(particle_rows),
                     first_cells.slice_mut(cells.clone()),
                     second_cells.slice_mut(cells),
                 )
@@ -1163,7 +1165,7 @@ impl Simulation {
             let run_items = |stage: usize, rows: Range<usize>| {
                 let substep = plan.substeps[stage];
                 match plan.kinds[stage] {
-                    StageKind::Wind => rows.for_each(|row| wind_cell_row(renewals[substep], row)),
+                    StageKind::Wind => wind_cell_rows(renewals[substep], rows),
                     StageKind::Open => {
                         rows.clone()
                             .for_each(|row| predict_row(tethers_of(substep), row));
@@ -1200,7 +1202,7 @@ impl Simulation {
                 // Last row `row` of the cell row above it (none above the first row).
                 WaveItem::Wind => {
                     if row > 0 {
-                        wind_cell_row(renew, row - 1)
+                        wind_cell_rows(renew, row - 1..row)
                     }
                 }
                 WaveItem::Predict => predict_row(tethers_of(0), row),
