@@ -1115,7 +1115,6 @@ impl Simulation {
                 project_rows(0..opening, rows);
             }
         };
-        // The wind's shares of cell row `row`, from particle rows `row` and `row + 1`.
         // The wind's shares of cell rows `rows`, from particle rows `rows.start..=rows.end`.
         let wind_cell_rows = |renewal: Option<(Wind, DVec3)>, rows: Range<usize>| {
             let (wind, air_velocity) = renewal.expect("a wind item renews the shares");
@@ -1188,7 +1187,7 @@ impl Simulation {
             return true;
         }
         // First pass (unless the wavefront does it): the forces (unless summed already), the prediction
-        // and the pins' gather, then, pass by pass, the opening batches, row by row.
+        // and the pins' gather of each part's rows, then, pass by pass, the opening batches over them.
         if !prediction_in_wavefront {
             parts(rows, parallel, row_grain, |rows| {
                 rows.clone().for_each(|row| predict_row(tethers_of(0), row));
@@ -1232,7 +1231,7 @@ impl Simulation {
             }
             let last = iteration + 1 == iterations;
             // Last pass of the sweep: the closing batches, the attachments and, on the last sweep, the
-            // velocities, else the next sweep's opening batches, row by row.
+            // velocities, else the next sweep's opening batches, over each part's rows.
             parts(rows, parallel, row_grain, |rows| {
                 close_rows(tethers_of(0), rows, last)
             });

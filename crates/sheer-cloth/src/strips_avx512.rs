@@ -457,9 +457,9 @@ unsafe fn solve<
 }
 
 /// The whole cloth's arrays a strip reads and writes, as base pointers: each strip's ends and
-/// constraints are then offsets from them (for an apart strip, two index registers for all of them). (With a pointer per end
-/// and component, eighteen in all, the loop kept some on the stack and shuffled the rest between
-/// registers every block: 35 of its 110 instructions.)
+/// constraints are then offsets from them (for an apart strip, two index registers for all of them).
+/// With a pointer per end and component, eighteen in all, the loop kept some on the stack and shuffled
+/// the rest between registers every block: 35 of its 110 instructions.
 #[derive(Clone, Copy)]
 pub(crate) struct StripArrays {
     /// Positions by component, and their length.
