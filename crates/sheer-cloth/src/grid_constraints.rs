@@ -490,11 +490,24 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
     lambdas: &DisjointSlice<'_, f64>,
     families: &[FamilyConstants; 3],
 ) {
+    // With AVX-512, the whole cloth's arrays, which every run indexes from.
+    #[cfg(target_arch = "x86_64")]
+    let arrays = std::arch::is_x86_feature_detected!("avx512f").then(|| {
+        let (previous, previous_len) = previous.pointers();
+        crate::strips_avx512::StripArrays::new(
+            positions.pointers(),
+            (previous.map(<*mut f64>::cast_const), previous_len),
+            inverse_masses,
+            rest_lengths,
+            inverse_denominators,
+            (lambdas.as_mut_ptr(), lambdas.len()),
+        )
+    });
     let mut left = strips;
     while let Some(strip) = left.first() {
         let family = families[family_index(strip.kind)];
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if let Some(arrays) = arrays {
             // The strips from here of the same family and layout (for an along strip, the same half).
             let run = left
                 .iter()
@@ -508,21 +521,6 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
                 })
                 .count();
             let (this, next) = left.split_at(run);
-            let (x, particles) = positions.pointers();
-            let arrays = crate::strips_avx512::StripArrays {
-                x,
-                particles,
-                previous: previous.pointers().0.map(<*mut f64>::cast_const),
-                inverse_masses: inverse_masses.as_ptr(),
-                rest_lengths: rest_lengths.as_ptr(),
-                inverse_denominators: inverse_denominators.as_ptr(),
-                lambdas: lambdas.as_mut_ptr(),
-                constraints: rest_lengths
-                    .len()
-                    .min(inverse_denominators.len())
-                    .min(lambdas.len()),
-            };
-            assert!(previous.pointers().1 == particles && inverse_masses.len() == particles);
             // SAFETY: the CPU has AVX-512F (checked above); the arrays are valid for the lengths given,
             // an apart strip's runs do not overlap (`Layout::Apart`), and the rest is the caller's
             // contract.
@@ -1006,19 +1004,17 @@ mod tests {
         let previous = Xyz::of(previous);
         #[cfg(target_arch = "x86_64")]
         if STRIP && std::arch::is_x86_feature_detected!("avx512f") {
-            let positions = split.disjoint();
-            let constraints = rest.len().min(denominators.len()).min(lambdas.len());
-            let arrays = crate::strips_avx512::StripArrays {
-                x: positions.pointers().0,
-                particles: 2 * n,
-                previous: [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
-                inverse_masses: w.as_ptr(),
-                rest_lengths: rest.as_ptr(),
-                inverse_denominators: denominators.as_ptr(),
-                lambdas: lambdas.as_mut_ptr(),
-                constraints,
-            };
-            assert!(w.len() == 2 * n && previous.len() == 2 * n);
+            let arrays = crate::strips_avx512::StripArrays::new(
+                split.disjoint().pointers(),
+                (
+                    [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
+                    previous.len(),
+                ),
+                w,
+                rest,
+                denominators,
+                (lambdas.as_mut_ptr(), lambdas.len()),
+            );
             // SAFETY: the CPU has AVX-512F; the arrays are as long as given; one thread.
             unsafe {
                 crate::strips_avx512::project_apart_strips::<PBD, MULTIPLIERS, DAMPED>(

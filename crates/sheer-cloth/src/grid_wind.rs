@@ -630,11 +630,10 @@ by_cpu! {
         let n = x.len();
         let last = n - 1;
         let (masses, inverse_masses) = (&masses[..n], &inverse_masses[..n]);
-        let (v, previous) = (&mut v[..n], &mut previous[..n]);
         // Rows of `last` cells: with that length known, the interior loop needs no bounds checks.
         let above = [above_first.map(|s| &s[..last]), above_second.map(|s| &s[..last])];
         let below = [below_first.map(|s| &s[..last]), below_second.map(|s| &s[..last])];
-        let (x, previous) = (&mut x[..n], &mut previous[..n]);
+        let (x, v, previous) = (&mut x[..n], &mut v[..n], &mut previous[..n]);
         // Through a function rather than a closure, which the compiler called per particle.
         let cells = (above, below);
         let ends = (h, gravity, air_damping);

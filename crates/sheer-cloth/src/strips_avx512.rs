@@ -226,20 +226,14 @@ pub(crate) unsafe fn project_along<
     assert!(previous.x.len() == n && previous.y.len() == n && previous.z.len() == n);
     assert!(inverse_masses.len() == n);
     assert!(inverse_denominators.len() == constraints && lambdas.len() == constraints);
-    let arrays = StripArrays {
-        x: [x.x.as_mut_ptr(), x.y.as_mut_ptr(), x.z.as_mut_ptr()],
-        particles: n,
-        previous: [
-            previous.x.as_ptr(),
-            previous.y.as_ptr(),
-            previous.z.as_ptr(),
-        ],
-        inverse_masses: inverse_masses.as_ptr(),
-        rest_lengths: rest_lengths.as_ptr(),
-        inverse_denominators: inverse_denominators.as_ptr(),
-        lambdas: lambdas.as_mut_ptr(),
-        constraints,
-    };
+    let arrays = StripArrays::new(
+        ([x.x.as_mut_ptr(), x.y.as_mut_ptr(), x.z.as_mut_ptr()], n),
+        ([previous.x, previous.y, previous.z].map(<[f64]>::as_ptr), n),
+        inverse_masses,
+        rest_lengths,
+        inverse_denominators,
+        (lambdas.as_mut_ptr(), constraints),
+    );
     // SAFETY: the CPU has AVX-512F (the caller's contract); the arrays are the slices, as long as
     // asserted, and borrowed exclusively (the previous positions shared).
     unsafe {
@@ -475,6 +469,35 @@ pub(crate) struct StripArrays {
     pub inverse_denominators: *const f64,
     pub lambdas: *mut f64,
     pub constraints: usize,
+}
+
+impl StripArrays {
+    /// The arrays from the first element of each, with the particle and constraint counts they share:
+    /// `x` and `previous` by component (each `particles` long), `lambdas` as long as the other
+    /// per-constraint arrays or longer.
+    pub(crate) fn new(
+        (x, particles): ([*mut f64; 3], usize),
+        (previous, previous_len): ([*const f64; 3], usize),
+        inverse_masses: &[f64],
+        rest_lengths: &[f64],
+        inverse_denominators: &[f64],
+        (lambdas, lambdas_len): (*mut f64, usize),
+    ) -> StripArrays {
+        assert!(previous_len == particles && inverse_masses.len() == particles);
+        StripArrays {
+            x,
+            particles,
+            previous,
+            inverse_masses: inverse_masses.as_ptr(),
+            rest_lengths: rest_lengths.as_ptr(),
+            inverse_denominators: inverse_denominators.as_ptr(),
+            lambdas,
+            constraints: rest_lengths
+                .len()
+                .min(inverse_denominators.len())
+                .min(lambdas_len),
+        }
+    }
 }
 
 /// Projects apart strips one after another in one call: strip `(a, b, first, count)` joins particles
