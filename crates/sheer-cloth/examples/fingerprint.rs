@@ -13,6 +13,14 @@
 //! that many threads (two or more: the parallel code paths forced on) over that many frames, after ten
 //! frames of warm-up. Copy this file into another checkout's `crates/sheer-cloth/examples/` to build
 //! the same program against another version of the library.
+//!
+//! `cargo run -p sheer-cloth --release --example fingerprint -- together 64x46 400` says how much of two
+//! cores the machine gives right now: it times that setting on one thread alone, then two independent
+//! one-thread runs at the same time, then one alone again, and prints how many runs' work the two did
+//! in the time one took alone (the mean of the two): 2.00 for two full cores; less on a virtual machine
+//! whose host shares its cores. `… -- handoff` prints how long one thread takes to see what another has
+//! just written (a counter bounced between two spinning threads): where the host puts the two virtual
+//! CPUs on cores far apart, this grows and so does the two-thread step's cost.
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
@@ -67,45 +75,125 @@ fn grid(columns: usize, rows: usize) -> ClothModel {
     ClothModel::grid(&spec).expect("a valid grid")
 }
 
+/// Mean milliseconds per frame of small-steps XPBD ×20 on a `columns × rows` flag on `threads` threads
+/// over `frames` frames, after ten frames of warm-up.
+fn time_frames(columns: usize, rows: usize, threads: usize, frames: u32) -> f64 {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool");
+    pool.install(|| {
+        let model = grid(columns, rows).with_hoist_pinned().expect("a grid");
+        let mut sim = flag(
+            model,
+            Method::SmallStepsXpbd { substeps: 20 },
+            Some(1),
+            threads,
+        );
+        for _ in 0..10 {
+            sim.step(FRAME).expect("a stable flag");
+        }
+        let start = Instant::now();
+        for _ in 0..frames {
+            sim.step(FRAME).expect("a stable flag");
+        }
+        start.elapsed().as_secs_f64() * 1e3 / frames as f64
+    })
+}
+
+/// The mean time for one thread to see a value another thread has just stored, in nanoseconds, over
+/// `round_trips` round trips of a counter between two spinning threads (which the operating system
+/// then keeps on two CPUs). A two-thread step hands rows from core to core at every stage, so this
+/// latency is part of its cost.
+fn handoff_nanoseconds(round_trips: u64) -> f64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    // On a cache line of its own.
+    #[repr(align(128))]
+    struct Counter(AtomicU64);
+    let counter = Counter(AtomicU64::new(0));
+    let counter = &counter.0;
+    let await_value = |value: u64| {
+        while counter.load(Ordering::Acquire) != value {
+            std::hint::spin_loop();
+        }
+    };
+    std::thread::scope(|scope| {
+        scope.spawn(|| {
+            for i in 0..round_trips {
+                await_value(2 * i + 1);
+                counter.store(2 * i + 2, Ordering::Release);
+            }
+        });
+        // Let the other thread start spinning before the clock starts.
+        counter.store(1, Ordering::Release);
+        await_value(2);
+        let start = Instant::now();
+        for i in 1..round_trips {
+            counter.store(2 * i + 1, Ordering::Release);
+            await_value(2 * i + 2);
+        }
+        start.elapsed().as_secs_f64() * 1e9 / (2 * (round_trips - 1)) as f64
+    })
+}
+
+/// The grid, thread count and frame count of `time` (`together` passes 1 thread), the counts at least 1.
+fn parse_case(grid: &str, count: &str, frames: &str) -> Option<((usize, usize), usize, u32)> {
+    let (columns, rows) = grid.split_once('x')?;
+    let (columns, rows) = (columns.parse().ok()?, rows.parse().ok()?);
+    // The library refuses smaller grids (`GridTooSmall`); a usage error here rather than its panic below.
+    if columns < 2 || rows < 2 {
+        return None;
+    }
+    let count = count.parse::<usize>().ok().filter(|&n| n > 0)?;
+    let frames = frames.parse::<u32>().ok().filter(|&f| f > 0)?;
+    Some(((columns, rows), count, frames))
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.first().map(String::as_str) == Some("time") {
-        let usage = "usage: fingerprint time COLUMNSxROWS THREADS FRAMES";
-        let [grid_text, threads, frames] = &args[1..] else {
-            eprintln!("{usage}");
-            std::process::exit(2);
-        };
-        let parsed = grid_text
-            .split_once('x')
-            .and_then(|(c, r)| Some((c.parse().ok()?, r.parse().ok()?)))
-            .zip(threads.parse::<usize>().ok().filter(|&t| t > 0))
-            .zip(frames.parse::<u32>().ok().filter(|&f| f > 0));
-        let Some((((columns, rows), threads), frames)) = parsed else {
-            eprintln!("{usage}");
-            std::process::exit(2);
-        };
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a thread pool");
-        pool.install(|| {
-            let model = grid(columns, rows).with_hoist_pinned().expect("a grid");
-            let mut sim = flag(
-                model,
-                Method::SmallStepsXpbd { substeps: 20 },
-                Some(1),
-                threads,
+    match args.first().map(String::as_str) {
+        Some("time") => {
+            let parsed = match &args[1..] {
+                [grid, threads, frames] => parse_case(grid, threads, frames),
+                _ => None,
+            };
+            let Some(((columns, rows), threads, frames)) = parsed else {
+                eprintln!("usage: fingerprint time COLUMNSxROWS THREADS FRAMES");
+                std::process::exit(2);
+            };
+            println!("{:.4}", time_frames(columns, rows, threads, frames));
+            return;
+        }
+        Some("together") => {
+            let parsed = match &args[1..] {
+                [grid, frames] => parse_case(grid, "1", frames),
+                _ => None,
+            };
+            let Some(((columns, rows), _, frames)) = parsed else {
+                eprintln!("usage: fingerprint together COLUMNSxROWS FRAMES");
+                std::process::exit(2);
+            };
+            // Alone before and after the two, so that a change of the host's pace shows.
+            let before = time_frames(columns, rows, 1, frames);
+            let [first, second] = std::thread::scope(|scope| {
+                [(); 2]
+                    .map(|()| scope.spawn(|| time_frames(columns, rows, 1, frames)))
+                    .map(|run| run.join().expect("a timed run"))
+            });
+            let after = time_frames(columns, rows, 1, frames);
+            let alone = 0.5 * (before + after);
+            println!(
+                "alone {before:.4} and {after:.4} ms; two at once {first:.4} and {second:.4} ms: \
+                 {:.2} runs' work in the time of one",
+                alone / first + alone / second
             );
-            for _ in 0..10 {
-                sim.step(FRAME).expect("a stable flag");
-            }
-            let start = Instant::now();
-            for _ in 0..frames {
-                sim.step(FRAME).expect("a stable flag");
-            }
-            println!("{:.4}", start.elapsed().as_secs_f64() * 1e3 / frames as f64);
-        });
-        return;
+            return;
+        }
+        Some("handoff") => {
+            println!("{:.0} ns", handoff_nanoseconds(200_000));
+            return;
+        }
+        _ => {}
     }
     let methods = [
         Method::Pbd {
