@@ -382,10 +382,10 @@ pub(crate) fn first_index(
 /// Indices per block of [`first_index_screened`].
 const SCREEN_BLOCK: usize = 256;
 
-/// The smallest `i < len` for which `test(i)` holds, as [`first_index`], with `test` run only inside
-/// blocks of indices that `screen` flags. `screen(block)` must hold for every block that contains an
-/// index passing `test`; it is meant to be a loop without early exits, which vectorises where `test`'s
-/// search (which stops at the first hit) does not.
+/// The smallest `i < len` for which `test(i)` holds, as the tests' plain search `first_index` finds
+/// it, with `test` run only inside blocks of indices that `screen` flags. `screen(block)` must hold for
+/// every block that contains an index passing `test`; it is meant to be a loop without early exits,
+/// which vectorises where `test`'s search (which stops at the first hit) does not.
 pub(crate) fn first_index_screened(
     len: usize,
     parallel: bool,
