@@ -63,6 +63,52 @@ fn bench_sim_prints_the_documented_csv() {
     }
 }
 
+/// With two threads the benchmark says how long a hand-off between threads took, on stderr, so that
+/// the CSV on stdout stays CSV; with one thread it has nothing to say.
+#[test]
+fn bench_sim_prints_the_thread_handoff_beside_two_thread_runs() {
+    let run = |threads: &str| {
+        let out = sheer(&[
+            "bench",
+            "sim",
+            "--csv",
+            "--grid",
+            "16x11",
+            "--method",
+            "pbd",
+            "--threads",
+            threads,
+            "--seconds",
+            "0",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stdout = String::from_utf8(out.stdout).unwrap();
+        assert!(
+            stdout.lines().skip(1).all(|l| l.starts_with("pbd,16,11,")),
+            "{stdout}"
+        );
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let two = run("1,2");
+    if std::thread::available_parallelism().map_or(1, |n| n.get()) >= 2 {
+        let line = two
+            .lines()
+            .find(|l| l.starts_with("thread hand-off: "))
+            .unwrap_or_else(|| panic!("no hand-off line in {two:?}"));
+        let nanoseconds: u64 = line["thread hand-off: ".len()..]
+            .split(' ')
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no figure in {line:?}"));
+        assert!(nanoseconds > 0, "{line}");
+    }
+    assert!(!run("1").contains("hand-off"));
+}
+
 #[test]
 fn bench_sim_reports_a_diverging_method_instead_of_timing_garbage() {
     let text = bench_sim_csv(&["--method", "symplectic_euler", "--substeps", "1"]);

@@ -31,7 +31,9 @@ pub struct BenchSimArgs {
     /// methods have none (refused if no method measured has iterations).
     #[arg(long, allow_negative_numbers = true)]
     pub iterations: Option<u32>,
-    /// rayon thread counts to measure (comma-separated). Default: 1 and all cores.
+    /// rayon thread counts to measure (comma-separated). Default: 1 and all cores. With more than one
+    /// thread, the time one thread takes to see what another has written (`thread hand-off`, measured
+    /// before and after the runs) goes to stderr: two-thread times grow with it.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub threads: Vec<usize>,
     /// Particle count from which passes run on rayon's pool (default: the library's measured threshold;
@@ -303,6 +305,10 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         wind_substeps_per_update: args.wind_substeps_per_update,
         spring_damping: args.spring_damping,
     };
+    // Two-thread figures depend on how far apart the host has put the cores: measured before and after
+    // the runs, and printed beside them (to stderr, so that the CSV stays CSV).
+    let handoff = || sheer_cloth::thread_handoff_latency(Duration::from_millis(100));
+    let handoff_before = threads.iter().any(|&t| t > 1).then(handoff).flatten();
     if args.csv {
         println!(
             "method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s"
@@ -357,6 +363,14 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                 println!("{line}");
             }
         }
+    }
+    if let Some(before) = handoff_before {
+        let after = handoff().map_or("—".into(), |d| format!("{} ns", d.as_nanos()));
+        eprintln!(
+            "thread hand-off: {} ns before the runs, {after} after (two-thread times grow with it: \
+             crates/sheer-cloth/README.md, \"Against the target\")",
+            before.as_nanos()
+        );
     }
     Ok(())
 }

@@ -19,12 +19,12 @@
 //! one-thread runs at the same time, then one alone again, and prints how many runs' work the two did
 //! in the time one took alone (the mean of the two): 2.00 for two full cores; less on a virtual machine
 //! whose host shares its cores. `… -- handoff` prints how long one thread takes to see what another has
-//! just written (a counter bounced between two spinning threads): where the host puts the two virtual
-//! CPUs on cores far apart, this grows and so does the two-thread step's cost.
+//! just written (`sheer_cloth::thread_handoff_latency`): where the host puts the two virtual CPUs on
+//! cores far apart, this grows and so does the two-thread step's cost.
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::{ClothModel, GridSpec, Method, SimParams, Simulation};
@@ -101,41 +101,6 @@ fn time_frames(columns: usize, rows: usize, threads: usize, frames: u32) -> f64 
     })
 }
 
-/// The mean time for one thread to see a value another thread has just stored, in nanoseconds, over
-/// `round_trips` round trips of a counter between two spinning threads (which the operating system
-/// then keeps on two CPUs). A two-thread step hands rows from core to core at every stage, so this
-/// latency is part of its cost.
-fn handoff_nanoseconds(round_trips: u64) -> f64 {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    // On a cache line of its own.
-    #[repr(align(128))]
-    struct Counter(AtomicU64);
-    let counter = Counter(AtomicU64::new(0));
-    let counter = &counter.0;
-    let await_value = |value: u64| {
-        while counter.load(Ordering::Acquire) != value {
-            std::hint::spin_loop();
-        }
-    };
-    std::thread::scope(|scope| {
-        scope.spawn(|| {
-            for i in 0..round_trips {
-                await_value(2 * i + 1);
-                counter.store(2 * i + 2, Ordering::Release);
-            }
-        });
-        // Let the other thread start spinning before the clock starts.
-        counter.store(1, Ordering::Release);
-        await_value(2);
-        let start = Instant::now();
-        for i in 1..round_trips {
-            counter.store(2 * i + 1, Ordering::Release);
-            await_value(2 * i + 2);
-        }
-        start.elapsed().as_secs_f64() * 1e9 / (2 * (round_trips - 1)) as f64
-    })
-}
-
 /// The grid, thread count and frame count of `time` (`together` passes 1 thread), the counts at least 1.
 fn parse_case(grid: &str, count: &str, frames: &str) -> Option<((usize, usize), usize, u32)> {
     let (columns, rows) = grid.split_once('x')?;
@@ -190,7 +155,10 @@ fn main() {
             return;
         }
         Some("handoff") => {
-            println!("{:.0} ns", handoff_nanoseconds(200_000));
+            match sheer_cloth::thread_handoff_latency(Duration::from_millis(100)) {
+                Some(latency) => println!("{} ns", latency.as_nanos()),
+                None => println!("one CPU: no hand-off to measure"),
+            }
             return;
         }
         _ => {}

@@ -42,6 +42,7 @@ pub mod wind;
 
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};
 pub use model::{ClothModel, GridShape, GridSpec, Spring, SpringKind};
+pub use parallel::thread_handoff_latency;
 pub use params::{DivergenceLimits, Method, SimParams, SpringParams, Wind};
 pub use sim::{SetupError, Simulation, StepInfo, StrainStatistics};
 

@@ -307,6 +307,86 @@ fn start_team(threads: usize) -> Option<(Arc<Team>, Vec<JoinHandle<()>>)> {
     Some((team, handles))
 }
 
+/// How long a thread takes to see a value another thread has just stored: half the round trip of a
+/// counter bounced between two spinning threads (the median over batches of 256 round trips, so that a
+/// thread descheduled now and then does not count), over about `measuring_time` (at most 1000
+/// batches). `None` where the machine offers fewer than two CPUs, or where no round trip came back
+/// within four times `measuring_time` (two threads that cannot run at once).
+///
+/// A team hands rows from core to core at every stage of a sub-step, so this latency is part of the
+/// cost of a step on two threads: on a virtual machine whose host sometimes places its two CPUs on cores
+/// far apart (the build machine: about 30 ns, or about 150 ns), the default flag's frame on two threads
+/// follows it (the crate README, "Against the target"). `sheer bench sim` prints it beside two-thread
+/// figures.
+pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std::time::Duration> {
+    use std::sync::atomic::AtomicU64;
+    use std::time::Instant;
+    /// Round trips timed together: a look at the clock for each would add its own cost to each.
+    const BATCH: u32 = 256;
+    const MOST_BATCHES: usize = 1000;
+    const STOP: u64 = u64::MAX;
+    if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
+        return None;
+    }
+    /// On cache lines of its own, so that nothing else shares its transfers.
+    #[repr(align(128))]
+    struct Counter(AtomicU64);
+    let counter = Counter(AtomicU64::new(0));
+    let counter = &counter.0;
+    // The counter once it is above `after` (the other thread has stored), or `STOP`; `None` if `give_up`
+    // says so first (looked at every few thousand spins).
+    let await_above = |after: u64, give_up: &dyn Fn() -> bool| {
+        let mut spins = 0u32;
+        loop {
+            let value = counter.load(Ordering::Acquire);
+            if value == STOP || value > after {
+                return Some(value);
+            }
+            spins = spins.wrapping_add(1);
+            if spins.is_multiple_of(4096) && give_up() {
+                return None;
+            }
+            std::hint::spin_loop();
+        }
+    };
+    std::thread::scope(|scope| {
+        scope.spawn(|| {
+            let mut seen = 0;
+            // Answers each value with the next until told to stop.
+            while let Some(value) = await_above(seen, &|| false) {
+                if value == STOP {
+                    return;
+                }
+                counter.store(value + 1, Ordering::Release);
+                seen = value + 1;
+            }
+        });
+        let began = Instant::now();
+        // A machine too busy to run both threads at once would take a time slice a round trip.
+        let too_long = || began.elapsed() > 4 * measuring_time;
+        // One round trip before the clock starts: the other thread is spinning by then.
+        counter.store(1, Ordering::Release);
+        let mut value = await_above(1, &too_long);
+        let start = Instant::now();
+        // The time of each batch of `BATCH` round trips.
+        let mut batches = Vec::new();
+        'measuring: while batches.len() < MOST_BATCHES && start.elapsed() < measuring_time {
+            let batch_start = Instant::now();
+            for _ in 0..BATCH {
+                let Some(last) = value else {
+                    break 'measuring;
+                };
+                counter.store(last + 1, Ordering::Release);
+                value = await_above(last + 1, &too_long);
+            }
+            batches.push(batch_start.elapsed());
+        }
+        counter.store(STOP, Ordering::Release);
+        batches.sort_unstable();
+        (!batches.is_empty()).then(|| batches[batches.len() / 2] / (2 * BATCH))
+    })
+}
+
 /// The number of threads of the team this thread leads, when the team splits its passes into equal
 /// parts ([`Team::run`]): then a pass over `0..threads` gives each thread one index, and all of them run
 /// at once. `None` without a team, or when its passes are claimed chunk by chunk.
@@ -574,6 +654,21 @@ mod tests {
             assert!(hits.iter().all(|&h| h == 1));
             assert_eq!(runners, 2);
         }
+    }
+
+    /// The hand-off is measured wherever two threads can run, and returns (the other thread told to
+    /// stop and joined); on one CPU there is nothing to measure.
+    #[test]
+    fn the_handoff_latency_is_measured_where_two_threads_run() {
+        let measuring_time = std::time::Duration::from_millis(50);
+        let latency = thread_handoff_latency(measuring_time);
+        if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
+            assert_eq!(latency, None);
+            return;
+        }
+        let latency = latency.expect("two CPUs: a round trip comes back");
+        // Half a mean round trip: more than nothing, and within the time it was measured over.
+        assert!(latency > std::time::Duration::ZERO && latency < measuring_time);
     }
 
     #[test]
