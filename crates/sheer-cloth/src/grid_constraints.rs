@@ -286,7 +286,7 @@ by_cpu! {
 }
 
 by_cpu! {
-    /// [`may_exceed_strain`] over an along strip (see [`project_along`] for the layout).
+    /// [`may_exceed_strain`] over an along strip (see [`project_along_loop`] for the layout).
     fn along_near_strain<const HALF: usize, const CHUNK: usize>(
         x: &[[DVec3; CHUNK]],
         rest_lengths: &[[f64; HALF]],
@@ -654,7 +654,7 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
             let w = &inverse_masses[first];
             let (rest, denominators) = (rest_lengths, inverse_denominators);
             if half == 1 {
-                project_along::<PBD, MULTIPLIERS, DAMPED, 1>(
+                project_along_loop::<PBD, MULTIPLIERS, DAMPED, 1>(
                     x,
                     previous,
                     w,
@@ -664,7 +664,7 @@ pub(crate) unsafe fn project_strip<const PBD: bool, const MULTIPLIERS: bool, con
                     family,
                 );
             } else {
-                project_along::<PBD, MULTIPLIERS, DAMPED, 2>(
+                project_along_loop::<PBD, MULTIPLIERS, DAMPED, 2>(
                     x,
                     previous,
                     w,
@@ -771,55 +771,13 @@ by_cpu! {
     }
 }
 
-/// Projects an along strip of `HALF` interleaved constraints per chunk of `2·HALF` particles:
-/// constraint `m·HALF + j` joins particles `2·HALF·m + j` and `2·HALF·m + j + HALF`. With AVX-512
-/// through [`strips_avx512`](crate::strips_avx512), eight constraints at a time; otherwise through the
-/// loop. Same bits either way.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn project_along<
-    const PBD: bool,
-    const MULTIPLIERS: bool,
-    const DAMPED: bool,
-    const HALF: usize,
->(
-    x: XyzMut<'_>,
-    previous: XyzRef<'_>,
-    inverse_masses: &[f64],
-    rest_lengths: &[f64],
-    inverse_denominators: &[f64],
-    lambdas: &mut [f64],
-    family: FamilyConstants,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe {
-            crate::strips_avx512::project_along::<PBD, MULTIPLIERS, DAMPED, HALF>(
-                x,
-                previous,
-                inverse_masses,
-                rest_lengths,
-                inverse_denominators,
-                lambdas,
-                family,
-            )
-        };
-        return;
-    }
-    project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF>(
-        x,
-        previous,
-        inverse_masses,
-        rest_lengths,
-        inverse_denominators,
-        lambdas,
-        family,
-    );
-}
-
 by_cpu! {
-    /// [`project_along`] one constraint at a time: the path of a CPU without AVX-512, and the reference
-    /// its blocks are tested against (compiled per instruction set, [`by_cpu!`]).
+    /// Projects an along strip of `HALF` interleaved constraints per chunk of `2·HALF` particles
+    /// (constraint `m·HALF + j` joins particles `2·HALF·m + j` and `2·HALF·m + j + HALF`) one
+    /// constraint at a time: the path of a CPU without AVX-512 (compiled per instruction set,
+    /// [`by_cpu!`]), and the reference the AVX-512 blocks
+    /// ([`strips_avx512::project_along_strips`](crate::strips_avx512::project_along_strips)) are
+    /// tested against.
     pub(crate) fn project_along_loop<
         const PBD: bool,
         const MULTIPLIERS: bool,
@@ -978,7 +936,6 @@ mod tests {
         }
     }
 
-    /// [`project_along`]'s signature, for a test to hold it and its loop side by side.
     /// The solver's apart strip (`STRIP`: with AVX-512 [`strips_avx512::project_apart_strips`], else the
     /// loop) or the loop [`project_apart_loop`] alone, on the first `count` constraints of a strip
     /// joining particle `k` to particle `n + k` of `x` (`2n` particles): the whole arrays split, those
@@ -1046,8 +1003,9 @@ mod tests {
         split.join_into(x);
     }
 
-    /// [`project_along`] (or, with `LOOP`, [`project_along_loop`]) on the first `chunks` chunks of
-    /// joined vectors, split and joined back whole as in [`joined_apart`].
+    /// The solver's along strip (with AVX-512 [`strips_avx512::project_along_strips`], else the loop;
+    /// with `LOOP` the loop [`project_along_loop`] alone) on the first `chunks` chunks of joined vectors,
+    /// split and joined back whole as in [`joined_apart`].
     #[allow(clippy::too_many_arguments)]
     fn joined_along<
         const PBD: bool,
@@ -1067,13 +1025,32 @@ mod tests {
     ) {
         let (particles, constraints) = (2 * HALF * chunks, HALF * chunks);
         let (mut split, previous) = (Xyz::of(x), Xyz::of(previous));
+        #[cfg(target_arch = "x86_64")]
+        if !LOOP && std::arch::is_x86_feature_detected!("avx512f") {
+            let arrays = crate::strips_avx512::StripArrays::new(
+                split.disjoint().pointers(),
+                (
+                    [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
+                    previous.len(),
+                ),
+                w,
+                rest,
+                denominators,
+                (lambdas.as_mut_ptr(), lambdas.len()),
+            );
+            // SAFETY: the CPU has AVX-512F; the arrays are as long as given; one thread.
+            unsafe {
+                crate::strips_avx512::project_along_strips::<PBD, MULTIPLIERS, DAMPED, HALF>(
+                    arrays,
+                    [(0, 0, constraints)].into_iter(),
+                    family,
+                )
+            };
+            split.join_into(x);
+            return;
+        }
         let (moved, _) = split.as_mut().split_at_mut(particles);
-        let project = if LOOP {
-            project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF>
-        } else {
-            project_along::<PBD, MULTIPLIERS, DAMPED, HALF>
-        };
-        project(
+        project_along_loop::<PBD, MULTIPLIERS, DAMPED, HALF>(
             moved,
             previous.as_ref().range(0..particles),
             &w[..particles],

@@ -25,7 +25,6 @@
 
 use std::arch::x86_64::*;
 
-use crate::components::{XyzMut, XyzRef};
 use crate::grid_constraints::FamilyConstants;
 
 /// Constraints per block: one vector of eight `f64`.
@@ -196,58 +195,11 @@ fn dot(a: [__m512d; 3], b: [__m512d; 3]) -> __m512d {
     )
 }
 
-/// Projects an along strip of `HALF` constraints per chunk of `2·HALF` particles (see
-/// `grid_constraints::project_along`), eight constraints at a time; the last block may be partial (its
-/// missing lanes are loaded as zeros, which make an inactive constraint, and not stored). The arguments
-/// are those `project_along` takes: `x`, `previous` (split by component) and `inverse_masses` per
-/// particle, the rest per constraint.
-///
-/// # Safety
-/// The CPU must have AVX-512F.
-#[target_feature(enable = "avx512f")]
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn project_along<
-    const PBD: bool,
-    const MULTIPLIERS: bool,
-    const DAMPED: bool,
-    const HALF: usize,
->(
-    x: XyzMut<'_>,
-    previous: XyzRef<'_>,
-    inverse_masses: &[f64],
-    rest_lengths: &[f64],
-    inverse_denominators: &[f64],
-    lambdas: &mut [f64],
-    family: FamilyConstants,
-) {
-    let constraints = rest_lengths.len();
-    let n = 2 * constraints;
-    assert!(x.x.len() == n && x.y.len() == n && x.z.len() == n);
-    assert!(previous.x.len() == n && previous.y.len() == n && previous.z.len() == n);
-    assert!(inverse_masses.len() == n);
-    assert!(inverse_denominators.len() == constraints && lambdas.len() == constraints);
-    let arrays = StripArrays::new(
-        ([x.x.as_mut_ptr(), x.y.as_mut_ptr(), x.z.as_mut_ptr()], n),
-        ([previous.x, previous.y, previous.z].map(<[f64]>::as_ptr), n),
-        inverse_masses,
-        rest_lengths,
-        inverse_denominators,
-        (lambdas.as_mut_ptr(), constraints),
-    );
-    // SAFETY: the CPU has AVX-512F (the caller's contract); the arrays are the slices, as long as
-    // asserted, and borrowed exclusively (the previous positions shared).
-    unsafe {
-        project_along_strips::<PBD, MULTIPLIERS, DAMPED, HALF>(
-            arrays,
-            [(0, 0, constraints)].into_iter(),
-            family,
-        )
-    };
-}
-
 /// Projects along strips one after another in one call: strip `(a, first, count)` runs from particle
-/// `a` with constraints `first..first + count` (`HALF` per chunk of `2·HALF` particles, as
-/// [`project_along`]); the strips of a batch's consecutive rows, for instance.
+/// `a` with constraints `first..first + count`, `HALF` per chunk of `2·HALF` particles (constraint
+/// `m·HALF + j` of a strip joins its particles `2·HALF·m + j` and `2·HALF·m + j + HALF`); the strips of a
+/// batch's consecutive rows, for instance. Eight constraints a block; a strip's last block may be
+/// partial (its missing lanes are loaded as zeros, which make an inactive constraint, and not stored).
 ///
 /// # Safety
 /// As [`project_apart_strips`].
