@@ -936,6 +936,29 @@ mod tests {
         }
     }
 
+    /// The run kernels' view of whole split arrays (particles and constraints), for the strip tests.
+    #[cfg(target_arch = "x86_64")]
+    fn whole_arrays(
+        x: &mut Xyz,
+        previous: &Xyz,
+        w: &[f64],
+        rest: &[f64],
+        denominators: &[f64],
+        lambdas: &mut [f64],
+    ) -> crate::strips_avx512::StripArrays {
+        crate::strips_avx512::StripArrays::new(
+            x.disjoint().pointers(),
+            (
+                [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
+                previous.len(),
+            ),
+            w,
+            rest,
+            denominators,
+            (lambdas.as_mut_ptr(), lambdas.len()),
+        )
+    }
+
     /// The solver's apart strip (`STRIP`: with AVX-512 [`strips_avx512::project_apart_strips`], else the
     /// loop) or the loop [`project_apart_loop`] alone, on the first `count` constraints of a strip
     /// joining particle `k` to particle `n + k` of `x` (`2n` particles): the whole arrays split, those
@@ -961,17 +984,7 @@ mod tests {
         let previous = Xyz::of(previous);
         #[cfg(target_arch = "x86_64")]
         if STRIP && std::arch::is_x86_feature_detected!("avx512f") {
-            let arrays = crate::strips_avx512::StripArrays::new(
-                split.disjoint().pointers(),
-                (
-                    [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
-                    previous.len(),
-                ),
-                w,
-                rest,
-                denominators,
-                (lambdas.as_mut_ptr(), lambdas.len()),
-            );
+            let arrays = whole_arrays(&mut split, &previous, w, rest, denominators, lambdas);
             // SAFETY: the CPU has AVX-512F; the arrays are as long as given; one thread.
             unsafe {
                 crate::strips_avx512::project_apart_strips::<PBD, MULTIPLIERS, DAMPED>(
@@ -1027,17 +1040,7 @@ mod tests {
         let (mut split, previous) = (Xyz::of(x), Xyz::of(previous));
         #[cfg(target_arch = "x86_64")]
         if !LOOP && std::arch::is_x86_feature_detected!("avx512f") {
-            let arrays = crate::strips_avx512::StripArrays::new(
-                split.disjoint().pointers(),
-                (
-                    [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
-                    previous.len(),
-                ),
-                w,
-                rest,
-                denominators,
-                (lambdas.as_mut_ptr(), lambdas.len()),
-            );
+            let arrays = whole_arrays(&mut split, &previous, w, rest, denominators, lambdas);
             // SAFETY: the CPU has AVX-512F; the arrays are as long as given; one thread.
             unsafe {
                 crate::strips_avx512::project_along_strips::<PBD, MULTIPLIERS, DAMPED, HALF>(
