@@ -311,7 +311,7 @@ fn start_team(threads: usize) -> Option<(Arc<Team>, Vec<JoinHandle<()>>)> {
 /// counter bounced between two spinning threads (the median over batches of 256 round trips, so that a
 /// thread descheduled now and then does not count), over about `measuring_time` (at most 1000
 /// batches). `None` where the machine offers fewer than two CPUs, or where no round trip came back
-/// within four times `measuring_time` (two threads that cannot run at once).
+/// within four times `measuring_time` (two threads that cannot run at once; always for a zero time).
 ///
 /// A team hands rows from core to core at every stage of a sub-step, so this latency is part of the
 /// cost of a step on two threads: on a virtual machine whose host sometimes places its two CPUs on cores
@@ -363,7 +363,7 @@ pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std
         });
         let began = Instant::now();
         // A machine too busy to run both threads at once would take a time slice a round trip.
-        let too_long = || began.elapsed() > 4 * measuring_time;
+        let too_long = || began.elapsed() > measuring_time.saturating_mul(4);
         // One round trip before the clock starts: the other thread is spinning by then.
         counter.store(1, Ordering::Release);
         let mut value = await_above(1, &too_long);
@@ -667,8 +667,12 @@ mod tests {
             return;
         }
         let latency = latency.expect("two CPUs: a round trip comes back");
-        // Half a mean round trip: more than nothing, and within the time it was measured over.
+        // Half a round trip: more than nothing, and within the time it was measured over.
         assert!(latency > std::time::Duration::ZERO && latency < measuring_time);
+        // No time to measure in: nothing measured (and no panic for the longest time either, which
+        // stops after its 1000 batches).
+        assert_eq!(thread_handoff_latency(std::time::Duration::ZERO), None);
+        assert!(thread_handoff_latency(std::time::Duration::MAX).is_some());
     }
 
     #[test]
