@@ -308,7 +308,8 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     // Two-thread figures depend on how far apart the host has put the cores: measured before and after
     // the runs, and printed beside them (to stderr, so that the CSV stays CSV).
     let handoff = || sheer_cloth::thread_handoff_latency(Duration::from_millis(100));
-    let handoff_before = threads.iter().any(|&t| t > 1).then(handoff).flatten();
+    let several_threads = threads.iter().any(|&t| t > 1);
+    let handoff_before = several_threads.then(handoff);
     if args.csv {
         println!(
             "method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s"
@@ -365,11 +366,15 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         }
     }
     if let Some(before) = handoff_before {
-        let after = handoff().map_or("—".into(), |d| format!("{} ns", d.as_nanos()));
+        // `—`: not measured (one CPU, or two threads that could not run at once).
+        let text = |latency: Option<Duration>| {
+            latency.map_or("—".to_string(), |d| format!("{} ns", d.as_nanos()))
+        };
         eprintln!(
-            "thread hand-off: {} ns before the runs, {after} after (two-thread times grow with it: \
+            "thread hand-off: {} before the runs, {} after (two-thread times grow with it: \
              crates/sheer-cloth/README.md, \"Against the target\")",
-            before.as_nanos()
+            text(before),
+            text(handoff())
         );
     }
     Ok(())

@@ -308,8 +308,8 @@ fn start_team(threads: usize) -> Option<(Arc<Team>, Vec<JoinHandle<()>>)> {
 }
 
 /// How long a thread takes to see a value another thread has just stored: half the round trip of a
-/// counter bounced between two spinning threads (the median over batches of 256 round trips, so that a
-/// thread descheduled now and then does not count), over about `measuring_time` (at most 1000
+/// counter bounced between two spinning threads (the median over batches of 64 round trips, so that a
+/// thread descheduled now and then does not count), over about `measuring_time` (at most 4000
 /// batches). `None` where the machine offers fewer than two CPUs, or where no round trip came back
 /// within four times `measuring_time` (two threads that cannot run at once; always for a zero time).
 ///
@@ -322,8 +322,8 @@ pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std
     use std::sync::atomic::AtomicU64;
     use std::time::Instant;
     /// Round trips timed together: a look at the clock for each would add its own cost to each.
-    const BATCH: u32 = 256;
-    const MOST_BATCHES: usize = 1000;
+    const BATCH: u32 = 64;
+    const MOST_BATCHES: usize = 4000;
     const STOP: u64 = u64::MAX;
     if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
         return None;
@@ -334,7 +334,9 @@ pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std
     let counter = Counter(AtomicU64::new(0));
     let counter = &counter.0;
     // The counter once it is above `after` (the other thread has stored), or `STOP`; `None` if `give_up`
-    // says so first (looked at every few thousand spins).
+    // says so first (looked at every few thousand spins, when the core is also yielded: on a machine
+    // whose other CPU is busy the two threads take turns on one, and would otherwise spin away whole
+    // time slices).
     let await_above = |after: u64, give_up: &dyn Fn() -> bool| {
         let mut spins = 0u32;
         loop {
@@ -343,8 +345,11 @@ pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std
                 return Some(value);
             }
             spins = spins.wrapping_add(1);
-            if spins.is_multiple_of(4096) && give_up() {
-                return None;
+            if spins.is_multiple_of(4096) {
+                if give_up() {
+                    return None;
+                }
+                std::thread::yield_now();
             }
             std::hint::spin_loop();
         }
@@ -660,7 +665,9 @@ mod tests {
     /// stop and joined); on one CPU there is nothing to measure.
     #[test]
     fn the_handoff_latency_is_measured_where_two_threads_run() {
-        let measuring_time = std::time::Duration::from_millis(50);
+        // Long enough for two threads that must take turns with the other tests' (up to four times
+        // this before it gives up); it stops after its 4000 batches, about 20 ms, where they need not.
+        let measuring_time = std::time::Duration::from_millis(250);
         let latency = thread_handoff_latency(measuring_time);
         if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
             assert_eq!(latency, None);
@@ -670,7 +677,7 @@ mod tests {
         // Half a round trip: more than nothing, and within the time it was measured over.
         assert!(latency > std::time::Duration::ZERO && latency < measuring_time);
         // No time to measure in: nothing measured (and no panic for the longest time either, which
-        // stops after its 1000 batches).
+        // stops after its 4000 batches).
         assert_eq!(thread_handoff_latency(std::time::Duration::ZERO), None);
         assert!(thread_handoff_latency(std::time::Duration::MAX).is_some());
     }
