@@ -800,6 +800,11 @@ impl Simulation {
         step: Option<&WholeStep>,
     ) -> bool {
         let parallel = self.parallel();
+        // A switched-off family (stiffness 0) has every inverse divisor 0, so its constraints move
+        // nothing (`grid_constraints::project`); its batches are skipped rather than computed to no
+        // effect, so that switching a part of the model off saves its cost.
+        let skip_off = self.skip_switched_off_families;
+        let active: [bool; 3] = std::array::from_fn(|f| !skip_off || self.family[f].0 != 0.0);
         let Simulation {
             split_positions: positions,
             split_velocities: velocities,
@@ -1000,17 +1005,23 @@ impl Simulation {
         // touch no row at once that another part touches (`Pipeline`), and the wavefront's concurrent
         // parts and seams touch disjoint rows (`Wavefront::fits`); each strip owns its constraints'
         // multipliers.
-        let project_these = |strips: &[Strip]| unsafe {
-            project_strips::<PBD, MULTIPLIERS>(
-                strips,
-                &positions,
-                &previous,
-                inverse_masses,
-                rest_lengths,
-                inverse_denominators,
-                &lambdas,
-                &family,
-            )
+        let project_these = |strips: &[Strip]| {
+            // A batch holds one family.
+            if strips.iter().all(|s| !active[family_index(s.kind)]) {
+                return;
+            }
+            unsafe {
+                project_strips::<PBD, MULTIPLIERS>(
+                    strips,
+                    &positions,
+                    &previous,
+                    inverse_masses,
+                    rest_lengths,
+                    inverse_denominators,
+                    &lambdas,
+                    &family,
+                )
+            }
         };
         // The strips of batch `batch` whose last row is in `rows`: consecutive, as a batch's strips come
         // in ascending last rows (`last_rows_of_batch`).
@@ -1512,6 +1523,21 @@ mod tests {
         Simulation::new(model, params).unwrap()
     }
 
+    /// Small-steps XPBD, XPBD with several iterations and PBD with several: each way a grid's sub-step
+    /// can sweep.
+    const THREE_POSITION_BASED: [Method; 3] = [
+        Method::SmallStepsXpbd { substeps: 20 },
+        Method::Xpbd {
+            substeps: 2,
+            iterations: 5,
+        },
+        Method::Pbd {
+            substeps: 2,
+            iterations: 5,
+            stiffness: 1.0,
+        },
+    ];
+
     /// The bits of the positions and the velocities.
     fn state_bits(sim: &Simulation) -> (Vec<[u64; 3]>, Vec<[u64; 3]>) {
         let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
@@ -1545,23 +1571,58 @@ mod tests {
         state_bits(&sim)
     }
 
+    /// A switched-off family's batches are skipped, and that gives the bits of projecting them with their
+    /// zero divisors (which move nothing): each family switched off, and two at once, on one thread and
+    /// on two.
+    #[test]
+    fn skipping_a_switched_off_family_gives_the_bits_of_projecting_it() {
+        use crate::params::SpringParams;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for method in THREE_POSITION_BASED {
+            for parallel in [false, true] {
+                let run = |off: [bool; 3], skip: bool| {
+                    let mut sim = windy_flag(23, 13, GridSpec::default().height, method, parallel);
+                    let mut params = sim.params().clone();
+                    let families = [&mut params.stretch, &mut params.shear, &mut params.bend];
+                    for (family, off) in families.into_iter().zip(off) {
+                        if off {
+                            *family = SpringParams::disabled();
+                        }
+                    }
+                    sim.set_params(params).unwrap();
+                    sim.skip_switched_off_families = skip;
+                    pool.install(|| {
+                        for _ in 0..20 {
+                            sim.step(1.0 / 60.0).unwrap();
+                        }
+                    });
+                    state_bits(&sim)
+                };
+                let all_on = run([false; 3], true);
+                for off in [
+                    [true, false, false],
+                    [false, true, false],
+                    [false, false, true],
+                    [false, true, true],
+                ] {
+                    let skipped = run(off, true);
+                    let what = format!("{method:?}, {off:?} off, parallel {parallel}");
+                    assert_eq!(skipped, run(off, false), "{what}");
+                    assert_ne!(skipped, all_on, "{what}: the family is not off");
+                }
+            }
+        }
+    }
+
     /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
     /// the batches along rows, the attachments and the velocities in another) give the bits of the same
     /// work done pass by pass: batch by batch, and the forces summed beforehand by the general path.
     #[test]
     fn the_row_passes_give_the_bits_of_batch_by_batch() {
-        for method in [
-            Method::SmallStepsXpbd { substeps: 20 },
-            Method::Xpbd {
-                substeps: 2,
-                iterations: 5,
-            },
-            Method::Pbd {
-                substeps: 2,
-                iterations: 5,
-                stiffness: 1.0,
-            },
-        ] {
+        for method in THREE_POSITION_BASED {
             let run = |batch_by_batch: bool, forces_beforehand: bool| {
                 let height = GridSpec::default().height;
                 let mut sim = windy_flag(23, 13, height, method, false);

@@ -188,6 +188,9 @@ pub struct Simulation {
     pub(crate) grid_constraints: Option<GridConstraints>,
     /// How a grid's position-based sub-step orders its batches (tests pick one; the solver picks by size).
     pub(crate) grid_sweep: GridSweep,
+    /// Whether a grid's position-based sub-step skips the batches of a switched-off family (always, but
+    /// for a test that compares the skip with projecting them to no effect).
+    pub(crate) skip_switched_off_families: bool,
 }
 
 /// What the rows of a grid's first pass add to each particle's body force
@@ -371,6 +374,7 @@ impl Simulation {
                 .grid
                 .and_then(|shape| GridConstraints::new(shape, &model.springs)),
             grid_sweep: GridSweep::Auto,
+            skip_switched_off_families: true,
             grid_triangulation,
             grid: model.grid,
             masses: model.masses,

@@ -8,11 +8,19 @@
 //! time-averaged coverage with the full model's and the reference's ([`crate::coverage`]). Grids of
 //! another resolution are compared at the full model's particles through bilinear interpolation in the
 //! cloth's (u, v) parameters; coverage needs no resampling.
+//!
+//! What a part costs is timed apart from the accuracy runs ([`CostTiming`]): each variant beside the
+//! full model, the two runs taking turns every few frames, for a few rounds, and the variant's time over
+//! the full model's in the same round ([`CostRatio`]). One run each had not been enough: over the
+//! minutes an ablation takes, the host's pace drifts by more than most parts cost (a run of 2026-12-03
+//! had the flag without bending 22 % *dearer* than with it), and even back to back, a simulated second
+//! each, the rounds' ratios spread by ±15 %.
 
 use sheer_cloth::glam::DVec3;
 use sheer_cloth::{GridSpec, Method, SimParams, SpringParams};
 
 use crate::coverage::coverage_difference;
+use crate::cpu::thread_cpu_seconds;
 use crate::metrics::position_errors;
 use crate::reference::Reference;
 use crate::run::{Trajectory, on_one_thread, simulate};
@@ -30,8 +38,12 @@ pub struct AblationRow {
     pub grid: (usize, usize),
     /// Simulated time, s.
     pub time: f64,
-    /// CPU milliseconds per simulated second (one thread).
+    /// CPU milliseconds per simulated second (one thread): the median of the variant's timed runs
+    /// ([`CostTiming`]).
     pub cpu_ms_per_simulated_second: f64,
+    /// The variant's CPU time over the full model's, timed back to back (`None` on the full model's own
+    /// rows and where a timed run diverged).
+    pub cost_vs_full: Option<CostRatio>,
     /// RMS position difference from the full model run by the same method, m.
     pub rms_vs_full: Option<f64>,
     /// RMS position error against the full model's converged reference, m.
@@ -75,6 +87,100 @@ pub fn resample(positions: &[DVec3], from: &GridSpec, to: &GridSpec) -> Vec<DVec
         }
     }
     out
+}
+
+/// How the ablation times its variants: `rounds` rounds, each running every variant beside the full
+/// model over the first `window` simulated seconds (s), the two taking turns every few frames
+/// ([`paired_costs`]), without snapshots or coverage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CostTiming {
+    pub rounds: usize,
+    pub window: f64,
+}
+
+/// A variant's cost as a multiple of the full model's: the median of its rounds' ratios, and the least
+/// and greatest of them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CostRatio {
+    pub median: f64,
+    pub low: f64,
+    pub high: f64,
+}
+
+impl CostRatio {
+    /// The median, least and greatest of `ratios` (`None` when there are none).
+    pub fn of(ratios: &[f64]) -> Option<CostRatio> {
+        let mut sorted = ratios.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        Some(CostRatio {
+            median: median_of_sorted(&sorted)?,
+            low: *sorted.first()?,
+            high: *sorted.last()?,
+        })
+    }
+}
+
+/// The median of sorted `values` (the mean of the middle two for an even count).
+fn median_of_sorted(values: &[f64]) -> Option<f64> {
+    let n = values.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(values[n / 2]),
+        _ => Some(0.5 * (values[n / 2 - 1] + values[n / 2])),
+    }
+}
+
+/// Frames each run advances before the other takes its turn in [`paired_costs`].
+const FRAMES_PER_TURN: u64 = 6;
+
+/// CPU milliseconds per simulated second of the full model and of `variant` over the first `window` s,
+/// the two runs taking turns every [`FRAMES_PER_TURN`] frames (the first turn `full_first`'s, then
+/// alternately which goes first), so that a change in the host's pace falls on both alike (`None` if
+/// either diverged).
+fn paired_costs(
+    full: &Variant,
+    variant: &Variant,
+    window: f64,
+    full_first: bool,
+    monitor: &Monitor,
+) -> Result<Option<[f64; 2]>, StudyError> {
+    on_one_thread(|| {
+        let mut sims = Vec::with_capacity(2);
+        for v in [full, variant] {
+            sims.push((v.scene.simulation(v.method)?, v.scene.frame));
+        }
+        let frames: Vec<u64> = sims
+            .iter()
+            .map(|(_, frame)| (window / frame).round().max(1.0) as u64)
+            .collect();
+        let mut cpu = [0.0; 2];
+        let mut done = [0u64; 2];
+        let mut turn = 0u64;
+        while done[0] < frames[0] || done[1] < frames[1] {
+            let order = if full_first == turn.is_multiple_of(2) {
+                [0, 1]
+            } else {
+                [1, 0]
+            };
+            for i in order {
+                let (sim, frame) = &mut sims[i];
+                let steps = FRAMES_PER_TURN.min(frames[i] - done[i]);
+                let started = thread_cpu_seconds();
+                for _ in 0..steps {
+                    if sim.step(*frame).is_err() {
+                        return Ok(None);
+                    }
+                }
+                cpu[i] += thread_cpu_seconds() - started;
+                done[i] += steps;
+            }
+            turn += 1;
+            monitor.check()?;
+        }
+        Ok(Some(std::array::from_fn(|i| {
+            1e3 * cpu[i] / (frames[i] as f64 * sims[i].1)
+        })))
+    })?
 }
 
 struct Variant {
@@ -131,14 +237,26 @@ fn wind_interval_variants(scene: &Scene, method: Method) -> Vec<Variant> {
 
 /// The ablation of `scene` (the full model) run by `method` (the base: every row but the integrator
 /// rows uses it), at the reference's sample times and over the scene's coverage window. Every row is
-/// compared with the full model run by `method`.
+/// compared with the full model run by `method`; its cost is timed as `timing` says.
 pub fn ablation(
     scene: &Scene,
     method: Method,
     reference: &Reference,
     grids: &[(usize, usize)],
+    timing: CostTiming,
     monitor: &Monitor,
 ) -> Result<Vec<AblationRow>, StudyError> {
+    if timing.rounds == 0 || !(timing.window.is_finite() && timing.window > 0.0) {
+        return Err(StudyError::InvalidInput {
+            name: "ablation cost timing window",
+            value: if timing.rounds == 0 {
+                0.0
+            } else {
+                timing.window
+            },
+            reason: "needs at least one round and a finite window > 0 s",
+        });
+    }
     let times = reference.trajectory.snapshot_times();
     let attachments = scene.params.long_range_attachments;
     let mut variants = vec![
@@ -222,7 +340,7 @@ pub fn ablation(
             method,
         });
     }
-    monitor.add_work(variants.len() as u64);
+    monitor.add_work((variants.len() + timing.rounds) as u64);
     // The silhouette is taken through the coverage camera when the scene has one.
     let viewport = scene
         .coverage
@@ -232,7 +350,7 @@ pub fn ablation(
     let full_triangles = triangles_of(scene)?;
     let mut full_run: Option<Trajectory> = None;
     let mut rows = Vec::new();
-    for variant in variants {
+    for variant in &variants {
         let trajectory = on_one_thread(|| {
             simulate(
                 &variant.scene,
@@ -277,6 +395,7 @@ pub fn ablation(
                 grid: (variant.scene.grid.columns, variant.scene.grid.rows),
                 time,
                 cpu_ms_per_simulated_second: trajectory.cpu_ms_per_simulated_second(),
+                cost_vs_full: None,
                 rms_vs_full: rms_against(expected_full),
                 rms_vs_reference: rms_against(expected_reference),
                 silhouette_difference: silhouette,
@@ -286,6 +405,41 @@ pub fn ablation(
             });
         }
         monitor.finish_run(&format!("ablation {} {}", variant.part, variant.setting));
+    }
+    // The costs: every variant beside the full model (variant 0), round by round.
+    let mut costs = vec![Vec::new(); variants.len()];
+    let mut ratios = vec![Vec::new(); variants.len()];
+    for round in 0..timing.rounds {
+        for v in 1..variants.len() {
+            let full_first = (round + v).is_multiple_of(2);
+            let pair = paired_costs(
+                &variants[0],
+                &variants[v],
+                timing.window,
+                full_first,
+                monitor,
+            )?;
+            if let Some([full, own]) = pair {
+                costs[0].push(full);
+                costs[v].push(own);
+                ratios[v].push(own / full);
+            }
+        }
+        monitor.finish_run(&format!(
+            "ablation costs, round {} of {}",
+            round + 1,
+            timing.rounds
+        ));
+    }
+    for (v, variant_rows) in rows.chunks_mut(times.len().max(1)).enumerate() {
+        costs[v].sort_by(f64::total_cmp);
+        let cost = median_of_sorted(&costs[v]);
+        let ratio = CostRatio::of(&ratios[v]);
+        for row in variant_rows {
+            // A variant that diverged in every timed run keeps its accuracy run's cost.
+            row.cpu_ms_per_simulated_second = cost.unwrap_or(row.cpu_ms_per_simulated_second);
+            row.cost_vs_full = ratio;
+        }
     }
     Ok(rows)
 }

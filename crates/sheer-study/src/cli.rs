@@ -771,12 +771,12 @@ fn choice_file(
 /// The ablation CSV.
 pub fn ablation_csv(rows: &[AblationRow]) -> String {
     let mut csv = String::from(
-        "part,setting,method,substeps,iterations,columns,rows,time_s,cpu_ms_per_simulated_s,rms_vs_full_m,rms_vs_reference_m,silhouette_1_minus_iou,coverage_vs_full,coverage_vs_reference,diverged\n",
+        "part,setting,method,substeps,iterations,columns,rows,time_s,cpu_ms_per_simulated_s,cost_vs_full,cost_vs_full_low,cost_vs_full_high,rms_vs_full_m,rms_vs_reference_m,silhouette_1_minus_iou,coverage_vs_full,coverage_vs_reference,diverged\n",
     );
     for r in rows {
         let _ = writeln!(
             csv,
-            "{},\"{}\",{},{},{},{},{},{},{:.4},{},{},{},{},{},{}",
+            "{},\"{}\",{},{},{},{},{},{},{:.4},{},{},{},{},{},{},{},{},{}",
             r.part,
             r.setting,
             r.method.name(),
@@ -786,6 +786,9 @@ pub fn ablation_csv(rows: &[AblationRow]) -> String {
             r.grid.1,
             r.time,
             r.cpu_ms_per_simulated_second,
+            optional(r.cost_vs_full.map(|c| c.median)),
+            optional(r.cost_vs_full.map(|c| c.low)),
+            optional(r.cost_vs_full.map(|c| c.high)),
             optional(r.rms_vs_full),
             optional(r.rms_vs_reference),
             optional(r.silhouette_difference),
@@ -815,6 +818,7 @@ pub fn write_ablation(
         method,
         &measured.reference,
         &config.ablation_grids,
+        config.ablation_timing,
         monitor,
     )?;
     write_file(&out.join("ablation.csv"), &ablation_csv(&rows))?;
@@ -827,9 +831,13 @@ pub fn write_ablation(
          Silhouette: 1 − IoU of the coverage silhouettes seen by an orthographic camera looking along −z \
          ({}×{} pixels over a {} m × {} m window) at that time, against the full model run by the base method. \
          Coverage: the time-averaged coverage difference over {}–{} s (per run, so the same at both times) \
-         against the full model run by the base method and against the reference.\n\n\
+         against the full model run by the base method and against the reference. \
+         Cost: CPU time on one thread, timed apart from the accuracy runs over the first {} s of a run, \
+         {}, each variant right before or after the full model (alternately); \
+         `CPU ms / simulated s` is the median of the variant's timed runs, `× full` the median of its \
+         rounds' ratios to the full model's time (least–greatest in brackets).\n\n\
          Parameters of the full model: {}.\n\n\
-         | part | setting | method | t (s) | CPU ms / simulated s | vs full (mm) | vs reference (mm) | silhouette 1 − IoU | coverage vs full | coverage vs reference |\n|---|---|---|---|---|---|---|---|---|---|\n",
+         | part | setting | method | t (s) | CPU ms / simulated s | × full | vs full (mm) | vs reference (mm) | silhouette 1 − IoU | coverage vs full | coverage vs reference |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
         scene.grid.columns,
         scene.grid.rows,
         describe(&method),
@@ -844,6 +852,11 @@ pub fn write_ablation(
         window.viewport.size,
         window.start,
         window.end,
+        config.ablation_timing.window,
+        match config.ablation_timing.rounds {
+            1 => "in one round".to_string(),
+            rounds => format!("in {rounds} rounds"),
+        },
         parameter_line(scene)
     );
     let mm_or_diverged =
@@ -851,12 +864,16 @@ pub fn write_ablation(
     for r in &rows {
         let _ = writeln!(
             text,
-            "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} |",
             r.part,
             r.setting,
             describe(&r.method),
             r.time,
             r.cpu_ms_per_simulated_second,
+            r.cost_vs_full.map_or("—".to_string(), |c| format!(
+                "{:.3} ({:.3}–{:.3})",
+                c.median, c.low, c.high
+            )),
             mm_or_diverged(r.rms_vs_full),
             mm_or_diverged(r.rms_vs_reference),
             fraction(r.silhouette_difference),

@@ -37,7 +37,7 @@ pub mod silhouette;
 pub mod stability;
 pub mod work_precision;
 
-pub use ablation::{AblationRow, ablation};
+pub use ablation::{AblationRow, CostRatio, CostTiming, ablation};
 pub use choose::{Budget, Choice, ChoiceFile, DEFAULT_COVERAGE_BUDGET, choose};
 pub use cli::{StudyArgs, StudyCommand, run};
 pub use coverage::{CoverageWindow, MeanCoverage, coverage_difference};

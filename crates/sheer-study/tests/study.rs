@@ -12,8 +12,8 @@ use sheer_study::stability::{
     find_stability_boundary, omega_max_gershgorin, omega_max_power_iteration,
 };
 use sheer_study::{
-    Budget, ChoiceFile, CoverageWindow, ErrorMetrics, Monitor, Pinning, Row, Scene, StudyConfig,
-    choose, coverage_difference, simulate, work_precision,
+    Budget, ChoiceFile, CostRatio, CostTiming, CoverageWindow, ErrorMetrics, Monitor, Pinning, Row,
+    Scene, StudyConfig, ablation, choose, coverage_difference, simulate, work_precision,
 };
 
 /// A free 6 × 4 cloth at rest under gravity, no air, no damping: every particle feels the same
@@ -336,6 +336,35 @@ fn quick_study_writes_every_output() {
     );
     let md = std::fs::read_to_string(out.join("work-precision.md")).unwrap();
     assert!(md.contains("## Budget, choice and why"), "{md}");
+    // Every variant of the ablation but the full model has a cost ratio from its timed rounds, its
+    // median between the least and the greatest; the full model's rows have none.
+    let ablation = std::fs::read_to_string(out.join("ablation.csv")).unwrap();
+    let header: Vec<&str> = ablation.lines().next().unwrap().split(',').collect();
+    let at = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let (median, low, high) = (
+        at("cost_vs_full"),
+        at("cost_vs_full_low"),
+        at("cost_vs_full_high"),
+    );
+    let mut variants = 0;
+    for line in ablation.lines().skip(1) {
+        // The setting (the second column) is quoted and may hold commas: split after it.
+        let after_setting = line.rsplit('"').next().unwrap();
+        let fields: Vec<&str> = after_setting.split(',').skip(1).collect();
+        let value = |i: usize| fields[i - 2].parse::<f64>().ok();
+        if line.starts_with("full,") {
+            assert!(value(median).is_none() && value(low).is_none(), "{line}");
+            continue;
+        }
+        variants += 1;
+        let (m, l, h) = (
+            value(median).unwrap(),
+            value(low).unwrap(),
+            value(high).unwrap(),
+        );
+        assert!(0.0 < l && l <= m && m <= h && h.is_finite(), "{line}");
+    }
+    assert!(variants >= 10, "{ablation}");
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -503,4 +532,40 @@ fn the_reference_is_bit_reproducible() {
     assert_eq!(first.trajectory.coverage, second.trajectory.coverage);
     assert_eq!(first.halving, second.halving);
     assert!(first.coverage_halving.unwrap() >= 0.0);
+}
+
+#[test]
+fn a_cost_ratio_is_the_median_and_range_of_its_rounds() {
+    let ratio = CostRatio::of(&[1.2, 0.9, 1.0]).unwrap();
+    assert_eq!((ratio.median, ratio.low, ratio.high), (1.0, 0.9, 1.2));
+    let even = CostRatio::of(&[1.3, 0.9, 1.1, 1.0]).unwrap();
+    assert_eq!((even.median, even.low, even.high), (1.05, 0.9, 1.3));
+    assert_eq!(CostRatio::of(&[]), None);
+}
+
+#[test]
+fn the_ablation_refuses_a_timing_that_times_nothing() {
+    let scene = Scene::flag((6, 5)).unwrap();
+    let monitor = Monitor::hidden();
+    let reference = reference(&scene, &[0.05], &monitor).unwrap();
+    for timing in [
+        CostTiming {
+            rounds: 0,
+            window: 0.1,
+        },
+        CostTiming {
+            rounds: 1,
+            window: f64::NAN,
+        },
+        CostTiming {
+            rounds: 1,
+            window: 0.0,
+        },
+    ] {
+        let result = ablation(&scene, Method::default(), &reference, &[], timing, &monitor);
+        assert!(
+            matches!(result, Err(sheer_study::StudyError::InvalidInput { .. })),
+            "{timing:?}"
+        );
+    }
 }
