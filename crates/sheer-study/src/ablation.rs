@@ -90,8 +90,9 @@ pub fn resample(positions: &[DVec3], from: &GridSpec, to: &GridSpec) -> Vec<DVec
 }
 
 /// How the ablation times its variants: `rounds` rounds, each running every variant beside the full
-/// model over the first `window` simulated seconds (s), the two taking turns every few frames
-/// ([`paired_costs`]), without snapshots or coverage.
+/// model over the first `window` simulated seconds (s), the two taking turns every six frames (the
+/// first turn alternating between them from variant to variant and round to round), without snapshots
+/// or coverage.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostTiming {
     pub rounds: usize,
