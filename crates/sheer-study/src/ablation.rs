@@ -132,7 +132,7 @@ fn median_of_sorted(values: &[f64]) -> Option<f64> {
 }
 
 /// Frames each run advances before the other takes its turn in [`paired_costs`].
-const FRAMES_PER_TURN: u64 = 6;
+pub(crate) const FRAMES_PER_TURN: u64 = 6;
 
 /// CPU milliseconds per simulated second of the full model and of `variant` over the first `window` s,
 /// the two runs taking turns every [`FRAMES_PER_TURN`] frames (the first turn `full_first`'s, then

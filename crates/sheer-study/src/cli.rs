@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Subcommand, ValueEnum};
 use sheer_cloth::Method;
 
-use crate::ablation::{AblationRow, ablation};
+use crate::ablation::{AblationRow, FRAMES_PER_TURN, ablation};
 use crate::chart::{stability_chart, work_precision_chart};
 use crate::choose::{
     Budget, BudgetRecord, Choice, ChoiceFile, ChoiceRecord, DEFAULT_COVERAGE_BUDGET,
@@ -833,7 +833,7 @@ pub fn write_ablation(
          Coverage: the time-averaged coverage difference over {}–{} s (per run, so the same at both times) \
          against the full model run by the base method and against the reference. \
          Cost: CPU time on one thread, timed apart from the accuracy runs over the first {} s of a run, \
-         {}, each variant right before or after the full model (alternately); \
+         {}, each variant beside the full model, the two runs taking turns every {} frames; \
          `CPU ms / simulated s` is the median of the variant's timed runs, `× full` the median of its \
          rounds' ratios to the full model's time (least–greatest in brackets).\n\n\
          Parameters of the full model: {}.\n\n\
@@ -857,6 +857,7 @@ pub fn write_ablation(
             1 => "in one round".to_string(),
             rounds => format!("in {rounds} rounds"),
         },
+        FRAMES_PER_TURN,
         parameter_line(scene)
     );
     let mm_or_diverged =
