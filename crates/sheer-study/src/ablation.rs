@@ -41,8 +41,8 @@ pub struct AblationRow {
     /// CPU milliseconds per simulated second (one thread): the median of the variant's timed runs
     /// ([`CostTiming`]).
     pub cpu_ms_per_simulated_second: f64,
-    /// The variant's CPU time over the full model's, timed back to back (`None` on the full model's own
-    /// rows and where a timed run diverged).
+    /// The variant's CPU time over the full model's, the two run side by side ([`CostTiming`]; `None` on
+    /// the full model's own rows and where every timed run diverged).
     pub cost_vs_full: Option<CostRatio>,
     /// RMS position difference from the full model run by the same method, m.
     pub rms_vs_full: Option<f64>,

@@ -94,8 +94,8 @@ impl StudyConfig {
             choice_coarse_grid: (32, 23),
             coverage_window: CoverageWindow::flag(),
             ablation_grids: vec![(16, 11), (32, 23), (64, 46), (128, 93), (256, 186)],
-            // Five rounds of a simulated second: the flag is waving by then, and the rounds' ratios
-            // spread by a few per cent (docs/study.md).
+            // Five rounds of a simulated second: the flag is waving by then; a part's rounds spread by
+            // up to about a fifth around its median (gusts: 0.874–1.097, docs/ablation.md).
             ablation_timing: CostTiming {
                 rounds: 5,
                 window: 1.0,
