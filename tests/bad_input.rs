@@ -167,9 +167,14 @@ fn options_that_do_not_go_together_are_one_line_usage_errors() {
     assert_one_line_error(&["simulate", "--frames", "-1"], 2, &["--frames", "-1"]);
     assert_one_line_error(&["bench", "sim", "--threads", "-2"], 2, &["--threads"]);
     assert_one_line_error(
-        &["bench", "sim", "--wind-substeps-per-update", "0"],
+        &["bench", "sim", "--wind-renewal-interval", "-0.001"],
         1,
-        &["--wind-substeps-per-update"],
+        &["--wind-renewal-interval", "-0.001"],
+    );
+    assert_one_line_error(
+        &["bench", "sim", "--wind-renewal-interval", "NaN"],
+        1,
+        &["--wind-renewal-interval", "NaN"],
     );
     assert_one_line_error(
         &["bench", "sim", "--spring-damping", "maybe"],

@@ -993,7 +993,8 @@ mod key_tests {
         ("simulation.wind.gust_frequency", "0.75"),
         ("simulation.wind.seed", "7"),
         ("simulation.wind.per_substep", "false"),
-        ("simulation.wind.substeps_per_update", "4"),
+        // The default flag's is 0.002 s; held for the frame, the forces take none.
+        ("simulation.wind.renewal_interval", "0.0"),
         ("simulation.divergence.max_speed", "150.0"),
         ("simulation.divergence.max_strain", "5.0"),
         ("shading.model", "\"split\""),
@@ -1417,8 +1418,8 @@ mod key_tests {
                 "simulation.wind.gust_frequency",
             ),
             (
-                "[simulation.wind]\nsubsteps_per_update = 0".into(),
-                "simulation.wind.substeps_per_update",
+                "[simulation.wind]\nrenewal_interval = -0.002".into(),
+                "simulation.wind.renewal_interval",
             ),
             (
                 "[simulation.divergence]\nmax_speed = 0.0".into(),

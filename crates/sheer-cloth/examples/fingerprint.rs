@@ -39,7 +39,12 @@ fn flag(model: ClothModel, method: Method, wind_every: Option<u32>, threads: usi
     };
     if let Some(interval) = wind_every {
         params.wind.velocity = DVec3::new(6.0, 0.0, 1.0);
-        params.wind.substeps_per_update = interval;
+        // Held for `interval` sub-steps: the renewal interval is a time (0: every evaluation).
+        params.wind.renewal_interval = if interval > 1 {
+            f64::from(interval) * FRAME / f64::from(method.substeps())
+        } else {
+            0.0
+        };
     }
     params.parallel_min_particles = if threads > 1 { 0 } else { usize::MAX };
     Simulation::new(model, params).expect("a valid flag")

@@ -43,7 +43,9 @@ pub mod wind;
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};
 pub use model::{ClothModel, GridShape, GridSpec, Spring, SpringKind};
 pub use parallel::thread_handoff_latency;
-pub use params::{DivergenceLimits, Method, SimParams, SpringParams, Wind};
+pub use params::{
+    DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, DivergenceLimits, Method, SimParams, SpringParams, Wind,
+};
 pub use sim::{SetupError, Simulation, StepInfo, StrainStatistics};
 
 /// Re-exported so users need not depend on glam themselves.

@@ -507,10 +507,7 @@ impl Simulation {
         let wind = self.params.wind;
         let renewals = (0..substeps)
             .map(|s| {
-                if wind.per_substep
-                    && wind.substeps_per_update > 1
-                    && s % wind.substeps_per_update == 0
-                {
+                if wind.renewal_due(s, h) {
                     self.wind_stale = true;
                 }
                 self.due_wind_renewal(time + s as f64 * h)
@@ -1497,6 +1494,16 @@ mod tests {
 
     /// A grid of `columns` × `rows` particles and `height` m, hoist pinned, in a 6 m/s wind, stepped with
     /// `method`; the parallel code paths on with `parallel` (and off without).
+    /// The wind's renewal interval (s) that holds its forces for `substeps` sub-steps of `method` in the
+    /// 60 Hz steps of these tests (0, every evaluation, for 1).
+    fn held_for(substeps: u32, method: Method) -> f64 {
+        if substeps == 1 {
+            0.0
+        } else {
+            f64::from(substeps) / 60.0 / f64::from(method.substeps())
+        }
+    }
+
     fn windy_flag(
         columns: usize,
         rows: usize,
@@ -1819,7 +1826,7 @@ mod tests {
                         ..SimParams::default()
                     };
                     params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
-                    params.wind.substeps_per_update = interval;
+                    params.wind.renewal_interval = held_for(interval, params.method);
                     params.parallel_min_particles = if threads > 1 { 0 } else { usize::MAX };
                     let mut sim = Simulation::new(model, params).unwrap();
                     assert_eq!(sim.tether_row_reach, reach);
@@ -1874,7 +1881,7 @@ mod tests {
                     let height = GridSpec::default().height;
                     let mut sim = windy_flag(21, 29, height, method, threads > 1);
                     sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
-                    sim.params.wind.substeps_per_update = interval;
+                    sim.params.wind.renewal_interval = held_for(interval, method);
                     sim.grid_sweep = sweep;
                     turning_pole_bits(sim, threads, 15)
                 };

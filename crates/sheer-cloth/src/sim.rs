@@ -471,12 +471,9 @@ impl Simulation {
             let whole = split && self.pipelined_step(h, self.time, substeps);
             for s in (0..substeps).filter(|_| !whole) {
                 let t = self.time + s as f64 * h;
-                // `wind.substeps_per_update` > 1: the held aerodynamic forces are renewed at the first
-                // force evaluation of every k-th sub-step (k = 1 renews them at every evaluation).
-                if wind.per_substep
-                    && wind.substeps_per_update > 1
-                    && s % wind.substeps_per_update == 0
-                {
+                // `wind.renewal_interval` > 0: the held aerodynamic forces are renewed at the first
+                // force evaluation of every k-th sub-step (0 renews them at every evaluation).
+                if wind.renewal_due(s, h) {
                     self.wind_stale = true;
                 }
                 self.prescribe_pins(s, substeps, h);

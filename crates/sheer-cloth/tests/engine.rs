@@ -151,7 +151,7 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
         areal_density: 0.1,
         ..GridSpec::default()
     };
-    let run = |per_substep: bool, substeps_per_update: u32| {
+    let run = |per_substep: bool, renewal_interval: f64| {
         let model = ClothModel::grid(&spec)
             .unwrap()
             .with_hoist_pinned()
@@ -159,40 +159,53 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
         let mut params = SimParams::default();
         params.wind.velocity = DVec3::new(12.0, 0.0, 3.0);
         params.wind.per_substep = per_substep;
-        params.wind.substeps_per_update = substeps_per_update;
+        params.wind.renewal_interval = renewal_interval;
         let mut sim = Simulation::new(model, params).unwrap();
         (0..600).try_for_each(|_| sim.step(1.0 / 60.0).map(|_| ()))
     };
-    assert!(matches!(run(false, 1), Err(StepError::Diverged { .. })));
-    // Every sub-step, and held for 4 of the default method's 40 sub-steps (1/600 s: 0.15 per hold).
-    assert!(run(true, 1).is_ok());
-    assert!(run(true, 4).is_ok());
+    assert!(matches!(run(false, 0.0), Err(StepError::Diverged { .. })));
+    // Every sub-step, and held for the default flag's 2 ms (4 of the default method's 40 sub-steps:
+    // 0.18 per hold).
+    assert!(run(true, 0.0).is_ok());
+    assert!(run(true, sheer_cloth::DEFAULT_FLAG_WIND_RENEWAL_INTERVAL).is_ok());
 }
 
 #[test]
 fn wind_updated_every_few_sub_steps_lies_between_every_sub_step_and_once_per_frame() {
-    // Updating the wind every `substeps` sub-steps (the default method's count per frame) is exactly
-    // holding it for the frame, bit for bit; every 2 is neither that nor every sub-step (the setting is
-    // used).
-    let run = |per_substep: bool, substeps_per_update: u32| {
-        let mut sim = windy_flag(Method::default(), usize::MAX);
+    // Holding the wind for a whole frame's sub-steps (the default method's count) is exactly holding it
+    // for the frame, bit for bit; held for two sub-steps it is neither that nor every sub-step (the
+    // setting is used); and the interval is a time: held for two sub-steps of ×40 is held for one of
+    // ×20, which renews every sub-step.
+    let run = |method: Method, per_substep: bool, renewal_interval: f64| {
+        let mut sim = windy_flag(method, usize::MAX);
         let mut params = sim.params().clone();
         params.wind.per_substep = per_substep;
-        params.wind.substeps_per_update = substeps_per_update;
+        params.wind.renewal_interval = renewal_interval;
         sim.set_params(params).unwrap();
         for _ in 0..10 {
             sim.step(1.0 / 60.0).unwrap();
         }
         bits(&sim)
     };
-    let substeps = Method::default().substeps();
+    let method = Method::default();
+    let substeps = method.substeps();
     assert!(substeps > 2);
-    let held = run(false, 1);
-    assert_eq!(run(true, substeps), held);
-    let every = run(true, 1);
-    let every_other = run(true, 2);
+    let substep = 1.0 / 60.0 / f64::from(substeps);
+    let held = run(method, false, 0.0);
+    assert_eq!(run(method, true, f64::from(substeps) * substep), held);
+    // Any interval of a frame or more holds the forces for the frame.
+    assert_eq!(run(method, true, 1.0), held);
+    let every = run(method, true, 0.0);
+    let every_other = run(method, true, 2.0 * substep);
     assert_ne!(every_other, every);
     assert_ne!(every_other, held);
+    // Just short of two sub-steps: renewed at every sub-step's first force evaluation, which for
+    // small-steps XPBD (one evaluation a sub-step) is every evaluation.
+    assert_eq!(run(method, true, 1.9 * substep), every);
+    let half = Method::SmallStepsXpbd {
+        substeps: substeps / 2,
+    };
+    assert_eq!(run(half, true, 2.0 * substep), run(half, true, 0.0));
 }
 
 #[test]
@@ -380,16 +393,20 @@ fn invalid_parameters_and_time_steps_are_typed_errors() {
     };
     assert_eq!(bad(&|p| p.stretch.stiffness = 0.0), "stretch.stiffness");
     assert_eq!(
-        bad(&|p| p.wind.substeps_per_update = 0),
-        "wind.substeps_per_update"
+        bad(&|p| p.wind.renewal_interval = -1e-3),
+        "wind.renewal_interval"
+    );
+    assert_eq!(
+        bad(&|p| p.wind.renewal_interval = f64::NAN),
+        "wind.renewal_interval"
     );
     // An interval for forces held over the whole frame would be ignored.
     assert_eq!(
         bad(&|p| {
             p.wind.per_substep = false;
-            p.wind.substeps_per_update = 7;
+            p.wind.renewal_interval = 0.002;
         }),
-        "wind.substeps_per_update"
+        "wind.renewal_interval"
     );
     assert_eq!(bad(&|p| p.shear.stiffness = f64::NAN), "shear.stiffness");
     assert_eq!(bad(&|p| p.bend.damping = -1.0), "bend.damping");

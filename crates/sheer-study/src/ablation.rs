@@ -197,43 +197,60 @@ fn with_params(scene: &Scene, change: impl FnOnce(&mut SimParams)) -> Scene {
     changed
 }
 
-/// How often the wind's forces follow the cloth: every sub-step costs most (the wind is a third to a
-/// half of the default flag's CPU time, docs/study.md); held for a few sub-steps or a whole frame it
-/// costs less. Every interval of 1, 2, 4 and 10 sub-steps but the scene's own, and once per frame.
+/// How long the wind's forces are held between renewals (`wind.renewal_interval`): renewed at every
+/// sub-step the wind is a sixth of the default flag's frame (docs/study.md); held for a few sub-steps or
+/// a whole frame it costs less. Every interval of 0 (every sub-step), 1, 2 and 4 ms but the scene's
+/// own, and once per frame.
 fn wind_interval_variants(scene: &Scene, method: Method) -> Vec<Variant> {
     let wind = scene.params.wind;
     let mut variants = Vec::new();
-    for interval in [1, 2, 4, 10] {
-        if wind.per_substep && wind.substeps_per_update == interval {
+    for interval in WIND_RENEWAL_INTERVALS {
+        if wind.per_substep && wind.renewal_interval == interval {
             continue;
         }
         variants.push(Variant {
-            part: "wind update interval",
-            setting: if interval == 1 {
-                "every sub-step".into()
-            } else {
-                format!("every {interval} sub-steps")
-            },
+            part: "wind renewal",
+            setting: wind_renewal_setting(interval, scene.frame, method),
             scene: with_params(scene, |p| {
                 p.wind.per_substep = true;
-                p.wind.substeps_per_update = interval;
+                p.wind.renewal_interval = interval;
             }),
             method,
         });
     }
     if wind.per_substep {
         variants.push(Variant {
-            part: "wind update interval",
+            part: "wind renewal",
             setting: "once per frame".into(),
             // Held for the frame, the forces have no interval to renew at (the library refuses one).
             scene: with_params(scene, |p| {
                 p.wind.per_substep = false;
-                p.wind.substeps_per_update = 1;
+                p.wind.renewal_interval = 0.0;
             }),
             method,
         });
     }
     variants
+}
+
+/// The wind renewal intervals of the ablation and the seed study, s.
+pub(crate) const WIND_RENEWAL_INTERVALS: [f64; 4] = [0.0, 0.001, 0.002, 0.004];
+
+/// An interval in words, with the sub-steps of `method` it holds the forces for at steps of `frame` s.
+pub(crate) fn wind_renewal_setting(interval: f64, frame: f64, method: Method) -> String {
+    if interval == 0.0 {
+        return "every sub-step".into();
+    }
+    let h = frame / f64::from(method.substeps());
+    let wind = sheer_cloth::Wind {
+        renewal_interval: interval,
+        ..sheer_cloth::Wind::default()
+    };
+    format!(
+        "held ≤ {} ms (every {} sub-steps)",
+        interval * 1e3,
+        wind.substeps_per_renewal(h)
+    )
 }
 
 /// The ablation of `scene` (the full model) run by `method` (the base: every row but the integrator
@@ -472,36 +489,39 @@ mod tests {
     #[test]
     fn the_wind_rows_leave_out_the_scenes_own_interval() {
         let scene = Scene::default_flag().unwrap();
-        let settings = |scene: &Scene| -> Vec<(String, bool, u32)> {
+        let settings = |scene: &Scene| -> Vec<(String, bool, f64)> {
             wind_interval_variants(scene, Method::default())
                 .into_iter()
                 .map(|v| {
                     let wind = v.scene.params.wind;
-                    (v.setting, wind.per_substep, wind.substeps_per_update)
+                    (v.setting, wind.per_substep, wind.renewal_interval)
                 })
                 .collect()
         };
-        assert!(scene.params.wind.updated_every_substep());
+        assert_eq!(scene.params.wind.renewal_interval, 0.002);
         assert_eq!(
             settings(&scene),
             [
-                ("every 2 sub-steps".to_string(), true, 2),
-                ("every 4 sub-steps".to_string(), true, 4),
-                ("every 10 sub-steps".to_string(), true, 10),
-                ("once per frame".to_string(), false, 1),
+                ("every sub-step".to_string(), true, 0.0),
+                ("held ≤ 1 ms (every 2 sub-steps)".to_string(), true, 0.001),
+                ("held ≤ 4 ms (every 9 sub-steps)".to_string(), true, 0.004),
+                ("once per frame".to_string(), false, 0.0),
             ]
         );
-        let every_four = with_params(&scene, |p| p.wind.substeps_per_update = 4);
+        let every = with_params(&scene, |p| p.wind.renewal_interval = 0.0);
         assert_eq!(
-            settings(&every_four),
+            settings(&every),
             [
-                ("every sub-step".to_string(), true, 1),
-                ("every 2 sub-steps".to_string(), true, 2),
-                ("every 10 sub-steps".to_string(), true, 10),
-                ("once per frame".to_string(), false, 1),
+                ("held ≤ 1 ms (every 2 sub-steps)".to_string(), true, 0.001),
+                ("held ≤ 2 ms (every 4 sub-steps)".to_string(), true, 0.002),
+                ("held ≤ 4 ms (every 9 sub-steps)".to_string(), true, 0.004),
+                ("once per frame".to_string(), false, 0.0),
             ]
         );
-        let held = with_params(&scene, |p| p.wind.per_substep = false);
+        let held = with_params(&scene, |p| {
+            p.wind.per_substep = false;
+            p.wind.renewal_interval = 0.0;
+        });
         assert_eq!(settings(&held).len(), 4);
         assert!(settings(&held).iter().all(|(_, every, _)| *every));
     }

@@ -1,4 +1,4 @@
-//! Command line: `sheer study work-precision|stability|ablation|choose|all [--out DIR] [--quick]`.
+//! Command line: `sheer study work-precision|stability|ablation|choose|seeds|all [--out DIR] [--quick]`.
 //!
 //! The app's `study` subcommand is [`StudyArgs`] run by [`run`] (this crate's example `study` is a thin
 //! wrapper over the same two). Every command writes its CSV, PNG, Markdown and TOML files into `--out`.
@@ -17,6 +17,7 @@ use crate::choose::{
 };
 use crate::coverage::coverage_difference;
 use crate::reference::{Reference, reference};
+use crate::seeds::{SeedRow, across_seeds, summarise};
 use crate::stability::{
     StabilityMap, StabilitySetup, find_stability_boundary, map_methods, stability_map,
 };
@@ -83,6 +84,17 @@ const DEFAULT_BUDGET_MM: f64 = 5.0;
 /// RMS budget time when `--at` is not given (full study), s.
 const DEFAULT_BUDGET_TIME: f64 = 0.25;
 
+/// Options of `seeds`.
+#[derive(Args, Clone, Debug)]
+pub struct SeedArgs {
+    #[command(flatten)]
+    pub output: OutputArgs,
+    /// How many seeds of the wind's gusts (1, 2, … n), each a flutter of its own with its own reference
+    /// [default: 8; with `--quick`, 2].
+    #[arg(long)]
+    pub seeds: Option<u64>,
+}
+
 /// Output plus budget options.
 #[derive(Args, Clone, Debug)]
 pub struct ChoiceArgs {
@@ -102,6 +114,9 @@ pub enum StudyCommand {
     Ablation(ChoiceArgs),
     /// Cheapest method and settings for the default flag within an error budget.
     Choose(ChoiceArgs),
+    /// The ablation's closest rows (the wind's renewal interval, the dampings, half the sub-steps) on
+    /// several seeds of the wind's gusts, each against its own reference (not part of `all`).
+    Seeds(SeedArgs),
     /// Everything `docs/` publishes.
     All(ChoiceArgs),
 }
@@ -138,6 +153,11 @@ pub fn run(args: &StudyArgs) -> Result<(), StudyError> {
                 let measured = write_choice(&config, &budget, &out.out, &monitor)?;
                 write_ablation(&config, &measured, &out.out, &monitor)
             })
+        }
+        StudyCommand::Seeds(SeedArgs { output: out, seeds }) => {
+            let config = config(out);
+            let count = seeds.unwrap_or(if out.quick { 2 } else { 8 });
+            check_output(out).and_then(|()| write_seeds(&config, count, &out.out, &monitor))
         }
         StudyCommand::All(ChoiceArgs {
             output: out,
@@ -406,7 +426,7 @@ fn halving_lines(scene: &Scene, reference: &Reference, text: &mut String) {
 fn parameter_line(scene: &Scene) -> String {
     let p = &scene.params;
     format!(
-        "stretch {} N/m, shear {} N/m, bending {} N/m (enabled: {}/{}/{}), spring damping {}/{}/{} N·s/m, wind {:?} m/s, gusts {}, turbulence {}, lift {}, long-range attachments {}, air damping {} 1/s, {} kg/m²",
+        "stretch {} N/m, shear {} N/m, bending {} N/m (enabled: {}/{}/{}), spring damping {}/{}/{} N·s/m, wind {:?} m/s, gusts {}, turbulence {}, lift {}, wind forces {}, long-range attachments {}, air damping {} 1/s, {} kg/m²",
         p.stretch.stiffness,
         p.shear.stiffness,
         p.bend.stiffness,
@@ -420,6 +440,13 @@ fn parameter_line(scene: &Scene) -> String {
         p.wind.gust_strength,
         p.wind.turbulence,
         p.wind.lift_coefficient,
+        if !p.wind.per_substep {
+            "held for the frame".to_string()
+        } else if p.wind.renewal_interval == 0.0 {
+            "renewed every sub-step".to_string()
+        } else {
+            format!("held ≤ {} ms", p.wind.renewal_interval * 1e3)
+        },
         if p.long_range_attachments {
             "on"
         } else {
@@ -883,6 +910,118 @@ pub fn write_ablation(
         );
     }
     write_file(&out.join("ablation.md"), &text)
+}
+
+/// The seed study's CSV, one row per seed and setting.
+pub fn seeds_csv(rows: &[SeedRow]) -> String {
+    let mut csv = String::from(
+        "seed,setting,method,substeps,coverage_vs_reference,coverage_vs_full,reference_coverage_halving\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            csv,
+            "{},\"{}\",{},{},{},{},{}",
+            r.seed,
+            r.setting,
+            r.method.name(),
+            r.method.substeps(),
+            optional(r.coverage_vs_reference),
+            optional(r.coverage_vs_full),
+            optional(r.reference_halving)
+        );
+    }
+    csv
+}
+
+/// Runs the seed study ([`crate::seeds`]) on the default flag at the choice grid, base method the app's
+/// default ([`Method::default`], the committed choice), seeds `1..=count`; writes `seeds.{csv,md}`.
+pub fn write_seeds(
+    config: &StudyConfig,
+    count: u64,
+    out: &Path,
+    monitor: &Monitor,
+) -> Result<(), StudyError> {
+    if !(1..=64).contains(&count) {
+        return Err(StudyError::InvalidInput {
+            name: "--seeds",
+            value: count as f64,
+            reason: "must be 1 to 64",
+        });
+    }
+    let (columns, rows) = config.choice_grid;
+    // The full model renews the wind at every sub-step; the default flag's hold is one of the settings.
+    let mut scene = Scene::default_flag()?
+        .with_resolution(columns, rows)?
+        .with_coverage(Some(config.coverage_window));
+    scene.params.wind.renewal_interval = 0.0;
+    let method = Method::default();
+    let seeds: Vec<u64> = (1..=count).collect();
+    let rows = across_seeds(&scene, method, &seeds, &config.choice_times, monitor)?;
+    write_file(&out.join("seeds.csv"), &seeds_csv(&rows))?;
+    let window = config.coverage_window;
+    let halvings: Vec<f64> = seeds
+        .iter()
+        .filter_map(|&seed| {
+            rows.iter()
+                .find(|r| r.seed == seed)
+                .and_then(|r| r.reference_halving)
+        })
+        .collect();
+    let mut text = format!(
+        "# The ablation's closest rows across gust seeds ({}×{}, base method {}{})\n\n\
+         Each setting runs on {} flags that differ only in the seed of the wind's gusts and turbulence \
+         (`wind.seed` = 1 … {}), each against its own reference (velocity Verlet, the full model, the wind \
+         renewed every sub-step). `D`: the time-averaged coverage difference over {}–{} s from that \
+         seed's reference. `change`: the mean over the seeds of `D(setting) − D(full model)` on the same \
+         seed, ± its standard error. The references' own halving differences: {}.\n\n\
+         Parameters of the full model: {}.\n\n\
+         | setting | method | seeds | mean D | spread (s) | least–greatest | change vs full model |\n\
+         |---|---|---|---|---|---|---|\n",
+        scene.grid.columns,
+        scene.grid.rows,
+        describe(&method),
+        if config.quick {
+            "; **--quick: a small grid and a short window, not a result**"
+        } else {
+            ""
+        },
+        count,
+        count,
+        window.start,
+        window.end,
+        halvings
+            .iter()
+            .map(|h| format!("{h:.4}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        parameter_line(&scene)
+    );
+    for (setting, summary) in summarise(&rows) {
+        match summary {
+            Some(s) => {
+                let _ = writeln!(
+                    text,
+                    "| {} | {} | {} | {:.4} | {:.4} | {:.4}–{:.4} | {:+.4} ± {:.4} |",
+                    setting,
+                    describe(&s.method),
+                    s.seeds,
+                    s.mean_vs_reference,
+                    s.spread_vs_reference,
+                    s.least_vs_reference,
+                    s.greatest_vs_reference,
+                    s.mean_change,
+                    s.change_standard_error
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    text,
+                    "| {setting} | — | 0 (diverged on every seed) | | | | |"
+                );
+            }
+        }
+    }
+    write_file(&out.join("seeds.md"), &text)
 }
 
 /// The stability CSV.

@@ -6,7 +6,9 @@
 //! sub-steps per frame. The halving check integrates again at half that step; their difference at
 //! each sample time bounds the reference's own error (for a second-order method the finer run's error
 //! is about a third of it), and the study reports it beside the errors it measures; likewise the
-//! difference of their time-averaged coverages ([`crate::coverage`]) when the scene measures one.
+//! difference of their time-averaged coverages ([`crate::coverage`]) when the scene measures one. The
+//! reference renews the wind's forces at every force evaluation whatever the scene's
+//! `wind.renewal_interval`: it stands for the model, which a held wind approximates.
 
 use sheer_cloth::Method;
 
@@ -74,6 +76,11 @@ pub fn reference(
     sample_times: &[f64],
     monitor: &Monitor,
 ) -> Result<Reference, StudyError> {
+    // The converged solution of the model renews the wind at every force evaluation: holding it is an
+    // approximation a run makes (`Wind::renewal_interval`), not part of the model.
+    let mut scene = scene.clone();
+    scene.params.wind.renewal_interval = 0.0;
+    let scene = &scene;
     let substeps = reference_substeps(scene, REFERENCE_SAFETY)?;
     monitor.add_work(2);
     let run = |substeps: u32| -> Result<Trajectory, StudyError> {

@@ -297,6 +297,18 @@ fn quick_study_writes_every_output() {
         let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
         assert!(size > 100, "{} missing or empty", path.display());
     }
+    // The seed study (not part of `all`): one row per seed and setting, a summary row per setting.
+    sheer_study::cli::write_seeds(&StudyConfig::quick(), 2, &out, &Monitor::hidden()).unwrap();
+    let seeds = std::fs::read_to_string(out.join("seeds.csv")).unwrap();
+    assert_eq!(seeds.lines().count(), 1 + 2 * 8);
+    assert!(seeds.lines().skip(1).all(|l| !l.contains(",,")), "{seeds}");
+    let seeds_md = std::fs::read_to_string(out.join("seeds.md")).unwrap();
+    assert!(seeds_md.contains("| full model | small_steps_xpbd ×40 | 2 |"));
+    assert!(seeds_md.contains("held ≤ 2 ms (every 4 sub-steps), the default flag"));
+    assert!(matches!(
+        sheer_study::cli::write_seeds(&StudyConfig::quick(), 0, &out, &Monitor::hidden()),
+        Err(sheer_study::StudyError::InvalidInput { .. })
+    ));
     let csv = std::fs::read_to_string(out.join("work-precision.csv")).unwrap();
     assert!(csv.starts_with("scene,particles,method,"));
     for scene in ["flag", "hanging_sheet", "stiff", "default_flag"] {
