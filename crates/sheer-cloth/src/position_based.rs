@@ -1492,8 +1492,6 @@ mod tests {
     use crate::sim::Simulation;
     use glam::DVec3;
 
-    /// A grid of `columns` × `rows` particles and `height` m, hoist pinned, in a 6 m/s wind, stepped with
-    /// `method`; the parallel code paths on with `parallel` (and off without).
     /// The wind's renewal interval (s) that holds its forces for `substeps` sub-steps of `method` in the
     /// 60 Hz steps of these tests (0, every evaluation, for 1).
     fn held_for(substeps: u32, method: Method) -> f64 {
@@ -1504,6 +1502,8 @@ mod tests {
         }
     }
 
+    /// A grid of `columns` × `rows` particles and `height` m, hoist pinned, in a 6 m/s wind, stepped with
+    /// `method`; the parallel code paths on with `parallel` (and off without).
     fn windy_flag(
         columns: usize,
         rows: usize,

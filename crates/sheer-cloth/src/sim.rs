@@ -172,7 +172,8 @@ pub struct Simulation {
     pub(crate) backup_velocities: Vec<DVec3>,
     /// Velocity Verlet reuses the end-of-step acceleration; any outside change invalidates it.
     pub(crate) cached_forces_valid: bool,
-    /// The held aerodynamic forces must be recomputed (start of a step, or every sub-step).
+    /// The held aerodynamic forces must be recomputed (start of a step, or a renewal due by
+    /// `wind.renewal_interval`).
     pub(crate) wind_stale: bool,
     pub(crate) cg: CgScratch,
     /// Position-based solvers: the constraints with their per-step constants, valid for `denominator_key`.

@@ -198,9 +198,9 @@ fn with_params(scene: &Scene, change: impl FnOnce(&mut SimParams)) -> Scene {
 }
 
 /// How long the wind's forces are held between renewals (`wind.renewal_interval`): renewed at every
-/// sub-step the wind is a sixth of the default flag's frame (docs/study.md); held for a few sub-steps or
-/// a whole frame it costs less. Every interval of 0 (every sub-step), 1, 2 and 4 ms but the scene's
-/// own, and once per frame.
+/// sub-step the default flag costs 1.128× its frame with the 2 ms hold (docs/ablation.md); held longer it
+/// costs less. Every interval of 0 (every sub-step), 1, 2 and 4 ms but the scene's own, and once per
+/// frame.
 fn wind_interval_variants(scene: &Scene, method: Method) -> Vec<Variant> {
     let wind = scene.params.wind;
     let mut variants = Vec::new();
@@ -248,9 +248,15 @@ pub(crate) fn wind_renewal_setting(interval: f64, frame: f64, method: Method) ->
     };
     format!(
         "held ≤ {} ms (every {} sub-steps)",
-        interval * 1e3,
+        milliseconds(interval),
         wind.substeps_per_renewal(h)
     )
+}
+
+/// `seconds` in milliseconds, rounded to the microsecond for printing (0.007 s prints as 7, not
+/// 7.000000000000001).
+pub(crate) fn milliseconds(seconds: f64) -> f64 {
+    (seconds * 1e6).round() / 1e3
 }
 
 /// The ablation of `scene` (the full model) run by `method` (the base: every row but the integrator

@@ -114,8 +114,9 @@ pub enum StudyCommand {
     Ablation(ChoiceArgs),
     /// Cheapest method and settings for the default flag within an error budget.
     Choose(ChoiceArgs),
-    /// The ablation's closest rows (the wind's renewal interval, the dampings, half the sub-steps) on
-    /// several seeds of the wind's gusts, each against its own reference (not part of `all`).
+    /// The ablation's closest rows (the wind's renewal interval, the dampings, bending, lift, the
+    /// long-range attachments, half the sub-steps) on several seeds of the wind's gusts, each against its
+    /// own reference (not part of `all`).
     Seeds(SeedArgs),
     /// Everything `docs/` publishes.
     All(ChoiceArgs),
@@ -445,7 +446,10 @@ fn parameter_line(scene: &Scene) -> String {
         } else if p.wind.renewal_interval == 0.0 {
             "renewed every sub-step".to_string()
         } else {
-            format!("held ≤ {} ms", p.wind.renewal_interval * 1e3)
+            format!(
+                "held ≤ {} ms",
+                crate::ablation::milliseconds(p.wind.renewal_interval)
+            )
         },
         if p.long_range_attachments {
             "on"

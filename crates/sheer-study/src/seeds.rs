@@ -17,7 +17,7 @@
 //! wind is an approximation a run makes, not part of the model it approximates.
 
 use rayon::prelude::*;
-use sheer_cloth::{DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, Method};
+use sheer_cloth::{DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, Method, SpringParams};
 
 use crate::ablation::{WIND_RENEWAL_INTERVALS, wind_renewal_setting};
 use crate::coverage::coverage_difference;
@@ -70,13 +70,17 @@ enum Setting {
     WindOncePerFrame,
     NoDashpots,
     NoAirDamping,
+    /// The parts the ablation keeps by a margin below the measure's resolution.
+    NoBending,
+    NoLift,
+    NoAttachments,
     /// The base method with half its sub-steps (the choice's cheaper neighbour in the sweep).
     HalfTheSubsteps,
 }
 
 impl Setting {
     /// Every setting, the full model first.
-    const ALL: [Setting; 8] = [
+    const ALL: [Setting; 11] = [
         Setting::FullModel,
         Setting::WindHeld(WIND_RENEWAL_INTERVALS[1]),
         Setting::WindHeld(WIND_RENEWAL_INTERVALS[2]),
@@ -84,6 +88,9 @@ impl Setting {
         Setting::WindOncePerFrame,
         Setting::NoDashpots,
         Setting::NoAirDamping,
+        Setting::NoBending,
+        Setting::NoLift,
+        Setting::NoAttachments,
         Setting::HalfTheSubsteps,
     ];
 
@@ -103,6 +110,9 @@ impl Setting {
             Setting::WindOncePerFrame => "wind once per frame".into(),
             Setting::NoDashpots => "springs' dashpots off".into(),
             Setting::NoAirDamping => "air damping off".into(),
+            Setting::NoBending => "bending springs off".into(),
+            Setting::NoLift => "wind lift off".into(),
+            Setting::NoAttachments => "long-range attachments off".into(),
             Setting::HalfTheSubsteps => "half the sub-steps".into(),
         }
     }
@@ -121,6 +131,9 @@ impl Setting {
             }
             Setting::NoDashpots => p.remove_spring_damping(),
             Setting::NoAirDamping => p.air_damping = 0.0,
+            Setting::NoBending => p.bend = SpringParams::disabled(),
+            Setting::NoLift => p.wind.lift_coefficient = 0.0,
+            Setting::NoAttachments => p.long_range_attachments = false,
         }
         let method = if self == Setting::HalfTheSubsteps {
             halved(method)
@@ -206,8 +219,8 @@ pub fn across_seeds(
             reason: "the full model renews the wind at every sub-step",
         });
     }
-    // A reference (two runs) and every setting per seed.
-    monitor.add_work((seeds.len() * (2 + Setting::ALL.len())) as u64);
+    // Every setting per seed (each seed's reference adds its own two runs).
+    monitor.add_work((seeds.len() * Setting::ALL.len()) as u64);
     let per_seed: Vec<Result<Vec<SeedRow>, StudyError>> = seeds
         .par_iter()
         .map(|&seed| one_seed(scene, method, seed, sample_times, monitor))
@@ -280,8 +293,9 @@ fn mean_and_spread(values: &[f64]) -> Option<(f64, f64)> {
 }
 
 /// Each setting's figures over the seeds, in the order of the rows (`None` for a setting that
-/// diverged on every seed). The paired change counts only seeds on which both the setting and the full
-/// model finished.
+/// diverged on every seed). The first setting of the rows is the baseline, as [`across_seeds`] writes
+/// them (the full model). The paired change, and its standard error, count only seeds on which both
+/// the setting and the baseline finished; `seeds` counts those on which the setting finished.
 pub fn summarise(rows: &[SeedRow]) -> Vec<(String, Option<SeedSummary>)> {
     let mut names: Vec<&str> = Vec::new();
     for row in rows {

@@ -300,7 +300,7 @@ fn quick_study_writes_every_output() {
     // The seed study (not part of `all`): one row per seed and setting, a summary row per setting.
     sheer_study::cli::write_seeds(&StudyConfig::quick(), 2, &out, &Monitor::hidden()).unwrap();
     let seeds = std::fs::read_to_string(out.join("seeds.csv")).unwrap();
-    assert_eq!(seeds.lines().count(), 1 + 2 * 8);
+    assert_eq!(seeds.lines().count(), 1 + 2 * 11);
     assert!(seeds.lines().skip(1).all(|l| !l.contains(",,")), "{seeds}");
     let seeds_md = std::fs::read_to_string(out.join("seeds.md")).unwrap();
     assert!(seeds_md.contains("| full model | small_steps_xpbd ×40 | 2 |"));
