@@ -81,6 +81,17 @@ fn allocations_per_run(weighting: Weighting, execution: Execution) -> usize {
 
 #[test]
 fn updates_allocate_nothing() {
+    // Every worker thread started and settled before anything is counted, and none ending while
+    // counts run: the counter sees every thread of the process, and a rayon worker allocates when it
+    // first takes work (its crossbeam-epoch registration) and when it exits (its epoch state pushed
+    // onto a global queue). With a pool built and dropped inside the loop, a late-exiting worker once
+    // landed in the next "outside the pool" count (5, in a CI run on a loaded machine).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    pool.broadcast(|_| ());
+    rayon::broadcast(|_| ());
     for weighting in [Weighting::Area, Weighting::Angle] {
         // Serial: not a single allocation.
         assert_eq!(
@@ -91,10 +102,6 @@ fn updates_allocate_nothing() {
 
         // Parallel, with the frame loop itself running on a rayon worker (as in a renderer that
         // drives its frame from the pool): not a single allocation either.
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         let inside = pool.install(|| allocations_per_run(weighting, Execution::Parallel));
         assert_eq!(inside, 0, "{weighting:?} inside the pool");
 
