@@ -667,6 +667,57 @@ impl SimParams {
 }
 
 #[cfg(test)]
+mod wind_renewal_tests {
+    use super::*;
+
+    #[test]
+    fn an_interval_of_whole_sub_steps_renews_after_exactly_that_many() {
+        let held = |interval: f64| Wind {
+            renewal_interval: interval,
+            ..Wind::default()
+        };
+        // k sub-steps of a 60 Hz frame cut into n, however the products round.
+        for n in [3, 7, 20, 40, 41, 200, 1200] {
+            let h = 1.0 / 60.0 / f64::from(n);
+            for k in [1, 2, 3, 4, 9, 10] {
+                let interval = f64::from(k) * h;
+                assert_eq!(held(interval).substeps_per_renewal(h), k, "{k} of {n}");
+                // A hair less than k sub-steps holds the forces for one sub-step fewer.
+                assert_eq!(
+                    held(interval * (1.0 - 1e-6)).substeps_per_renewal(h),
+                    (k - 1).max(1),
+                    "just under {k} of {n}"
+                );
+            }
+        }
+        // The default flag: 2 ms of ×40 is 4 sub-steps, of ×20 two, of ×10 one.
+        for (n, k) in [(40, 4), (20, 2), (10, 1)] {
+            let h = 1.0 / 60.0 / f64::from(n);
+            assert_eq!(
+                held(DEFAULT_FLAG_WIND_RENEWAL_INTERVAL).substeps_per_renewal(h),
+                k
+            );
+        }
+        // No interval, an absurd one, or an absurd sub-step: never 0 (a modulus), never a panic.
+        assert_eq!(held(0.0).substeps_per_renewal(1e-3), 1);
+        assert_eq!(held(1e300).substeps_per_renewal(1e-3), u32::MAX);
+        assert_eq!(held(2e-3).substeps_per_renewal(0.0), u32::MAX);
+        assert_eq!(held(2e-3).substeps_per_renewal(f64::NAN), 1);
+        // Due at the step's first sub-step and every k-th after; never without an interval or with
+        // the forces held for the whole step.
+        let h = 1.0 / 2400.0;
+        let due: Vec<u32> = (0..12).filter(|&s| held(2e-3).renewal_due(s, h)).collect();
+        assert_eq!(due, [0, 4, 8]);
+        assert!((0..12).all(|s| !held(0.0).renewal_due(s, h)));
+        let frame = Wind {
+            per_substep: false,
+            ..Wind::default()
+        };
+        assert!((0..12).all(|s| !frame.renewal_due(s, h)));
+    }
+}
+
+#[cfg(test)]
 mod method_name_tests {
     use super::*;
 
