@@ -72,52 +72,6 @@ pub struct FlagOverrides {
     pub spring_damping: Switch,
 }
 
-/// `method` with the given sub-steps and iterations (PBD, XPBD; the CG cap of implicit Euler), its
-/// other knobs unchanged (also used by the window's panel).
-pub fn with_knobs(method: Method, substeps: Option<u32>, iterations: Option<u32>) -> Method {
-    let s = |x: u32| substeps.unwrap_or(x);
-    let i = |x: u32| iterations.unwrap_or(x);
-    match method {
-        Method::ExplicitEuler { substeps } => Method::ExplicitEuler {
-            substeps: s(substeps),
-        },
-        Method::SymplecticEuler { substeps } => Method::SymplecticEuler {
-            substeps: s(substeps),
-        },
-        Method::Verlet { substeps } => Method::Verlet {
-            substeps: s(substeps),
-        },
-        Method::ImplicitEuler {
-            substeps,
-            cg_max_iterations,
-            cg_tolerance,
-        } => Method::ImplicitEuler {
-            substeps: s(substeps),
-            cg_max_iterations: i(cg_max_iterations),
-            cg_tolerance,
-        },
-        Method::Pbd {
-            substeps,
-            iterations,
-            stiffness,
-        } => Method::Pbd {
-            substeps: s(substeps),
-            iterations: i(iterations),
-            stiffness,
-        },
-        Method::Xpbd {
-            substeps,
-            iterations,
-        } => Method::Xpbd {
-            substeps: s(substeps),
-            iterations: i(iterations),
-        },
-        Method::SmallStepsXpbd { substeps } => Method::SmallStepsXpbd {
-            substeps: s(substeps),
-        },
-    }
-}
-
 /// Longest `--seconds` of the benchmarks: an hour per case, so that a typo does not hang the program.
 pub const MAX_BENCH_SECONDS: f64 = 3600.0;
 
@@ -268,7 +222,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                 Method::NAMES.join(", ")
             ))
         })?;
-        methods.push(with_knobs(method, args.substeps, args.iterations));
+        methods.push(method.with_knobs(args.substeps, args.iterations));
     }
     // Applied to those methods that have iterations; a list without any would measure nothing it asks.
     if args.iterations.is_some() && !methods.iter().any(Method::has_iterations) {

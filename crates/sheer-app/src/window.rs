@@ -109,8 +109,8 @@ enum MethodKnob {
 /// their values. A knob the method does not have leaves it unchanged.
 fn with_knob(method: Method, knob: MethodKnob) -> Method {
     match (knob, method) {
-        (MethodKnob::Substeps(n), _) => crate::bench_sim::with_knobs(method, Some(n), None),
-        (MethodKnob::Iterations(n), _) => crate::bench_sim::with_knobs(method, None, Some(n)),
+        (MethodKnob::Substeps(n), _) => method.with_knobs(Some(n), None),
+        (MethodKnob::Iterations(n), _) => method.with_knobs(None, Some(n)),
         (
             MethodKnob::PbdStiffness(stiffness),
             Method::Pbd {

@@ -189,6 +189,53 @@ impl Method {
         )
     }
 
+    /// This method with the given sub-steps and iterations (PBD, XPBD; the CG cap of implicit Euler),
+    /// its other knobs unchanged (`None`: that knob unchanged too; a method without iterations ignores
+    /// them).
+    pub fn with_knobs(self, substeps: Option<u32>, iterations: Option<u32>) -> Method {
+        let s = |x: u32| substeps.unwrap_or(x);
+        let i = |x: u32| iterations.unwrap_or(x);
+        match self {
+            Method::ExplicitEuler { substeps } => Method::ExplicitEuler {
+                substeps: s(substeps),
+            },
+            Method::SymplecticEuler { substeps } => Method::SymplecticEuler {
+                substeps: s(substeps),
+            },
+            Method::Verlet { substeps } => Method::Verlet {
+                substeps: s(substeps),
+            },
+            Method::ImplicitEuler {
+                substeps,
+                cg_max_iterations,
+                cg_tolerance,
+            } => Method::ImplicitEuler {
+                substeps: s(substeps),
+                cg_max_iterations: i(cg_max_iterations),
+                cg_tolerance,
+            },
+            Method::Pbd {
+                substeps,
+                iterations,
+                stiffness,
+            } => Method::Pbd {
+                substeps: s(substeps),
+                iterations: i(iterations),
+                stiffness,
+            },
+            Method::Xpbd {
+                substeps,
+                iterations,
+            } => Method::Xpbd {
+                substeps: s(substeps),
+                iterations: i(iterations),
+            },
+            Method::SmallStepsXpbd { substeps } => Method::SmallStepsXpbd {
+                substeps: s(substeps),
+            },
+        }
+    }
+
     /// Short snake_case name, as used in scene files, CSV output and charts.
     pub fn name(&self) -> &'static str {
         match self {

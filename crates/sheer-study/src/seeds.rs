@@ -146,35 +146,7 @@ impl Setting {
 
 /// `method` with half its sub-steps (at least one).
 fn halved(method: Method) -> Method {
-    let substeps = (method.substeps() / 2).max(1);
-    match method {
-        Method::ExplicitEuler { .. } => Method::ExplicitEuler { substeps },
-        Method::SymplecticEuler { .. } => Method::SymplecticEuler { substeps },
-        Method::Verlet { .. } => Method::Verlet { substeps },
-        Method::ImplicitEuler {
-            cg_max_iterations,
-            cg_tolerance,
-            ..
-        } => Method::ImplicitEuler {
-            substeps,
-            cg_max_iterations,
-            cg_tolerance,
-        },
-        Method::Pbd {
-            iterations,
-            stiffness,
-            ..
-        } => Method::Pbd {
-            substeps,
-            iterations,
-            stiffness,
-        },
-        Method::Xpbd { iterations, .. } => Method::Xpbd {
-            substeps,
-            iterations,
-        },
-        Method::SmallStepsXpbd { .. } => Method::SmallStepsXpbd { substeps },
-    }
+    method.with_knobs(Some((method.substeps() / 2).max(1)), None)
 }
 
 /// Runs every setting on `scene` with the wind's seed set to each of `seeds` (the full model's
