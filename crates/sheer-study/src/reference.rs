@@ -8,7 +8,8 @@
 //! is about a third of it), and the study reports it beside the errors it measures; likewise the
 //! difference of their time-averaged coverages ([`crate::coverage`]) when the scene measures one. The
 //! reference renews the wind's forces at every force evaluation whatever the scene's
-//! `wind.renewal_interval`: it stands for the model, which a held wind approximates.
+//! `wind.renewal_interval` and `wind.per_substep`: it stands for the model, which a held wind
+//! approximates.
 
 use sheer_cloth::Method;
 
@@ -76,10 +77,12 @@ pub fn reference(
     sample_times: &[f64],
     monitor: &Monitor,
 ) -> Result<Reference, StudyError> {
-    // The converged solution of the model renews the wind at every force evaluation: holding it is an
-    // approximation a run makes (`Wind::renewal_interval`), not part of the model.
+    // The converged solution of the model renews the wind at every force evaluation: holding it, for a
+    // time (`Wind::renewal_interval`) or for the whole frame (`Wind::per_substep = false`), is an
+    // approximation a run makes, not part of the model.
     let mut scene = scene.clone();
     scene.params.wind.renewal_interval = 0.0;
+    scene.params.wind.per_substep = true;
     let scene = &scene;
     let substeps = reference_substeps(scene, REFERENCE_SAFETY)?;
     monitor.add_work(2);

@@ -547,6 +547,40 @@ fn the_reference_is_bit_reproducible() {
 }
 
 #[test]
+fn the_reference_renews_the_wind_however_the_scene_holds_it() {
+    // Holding the wind's forces (for a time, or for the whole frame) is an approximation a run makes,
+    // not part of the model: the reference of a scene that holds them is the reference of the model.
+    let config = StudyConfig::quick();
+    let scene = Scene::default_flag()
+        .unwrap()
+        .with_resolution(config.choice_grid.0, config.choice_grid.1)
+        .unwrap();
+    let times = [0.1];
+    let monitor = Monitor::hidden();
+    let bits = |scene: &Scene| -> Vec<u64> {
+        reference(scene, &times, &monitor)
+            .unwrap()
+            .trajectory
+            .snapshots
+            .iter()
+            .flat_map(|s| s.positions.iter().flat_map(|p| p.to_array()))
+            .map(f64::to_bits)
+            .collect()
+    };
+    let mut renewed = scene.clone();
+    renewed.params.wind.renewal_interval = 0.0;
+    let expected = bits(&renewed);
+    let mut held = scene.clone();
+    held.params.wind.renewal_interval = 0.004;
+    let mut per_frame = scene.clone();
+    per_frame.params.wind.renewal_interval = 0.0;
+    per_frame.params.wind.per_substep = false;
+    for (name, variant) in [("own", &scene), ("4 ms", &held), ("per frame", &per_frame)] {
+        assert!(bits(variant) == expected, "{name}: a different reference");
+    }
+}
+
+#[test]
 fn a_cost_ratio_is_the_median_and_range_of_its_rounds() {
     let ratio = CostRatio::of(&[1.2, 0.9, 1.0]).unwrap();
     assert_eq!((ratio.median, ratio.low, ratio.high), (1.0, 0.9, 1.2));
