@@ -428,7 +428,15 @@ impl Scene {
     /// Parses a scene from TOML text; relative paths resolve against `base_dir`.
     pub fn from_toml(text: &str, base_dir: &Path) -> Result<Scene, CliError> {
         let mut scene: Scene = toml::from_str(text).map_err(|e| {
-            CliError::new(format!("scene: {}", e.message().trim())).with_span(text, e.span())
+            let message = e.message().trim();
+            // A key earlier versions wrote: say what replaced it, not only that it is unknown.
+            let hint = if message.starts_with("unknown field `substeps_per_update`") {
+                "; `substeps_per_update` (a count of sub-steps) became `renewal_interval`, the longest \
+                 time the forces are held, in seconds (4 of 40 sub-steps at 60 Hz: 4/2400 s)"
+            } else {
+                ""
+            };
+            CliError::new(format!("scene: {message}{hint}")).with_span(text, e.span())
         })?;
         scene.base_dir = base_dir.to_path_buf();
         scene.builtin_assets = false;
@@ -1604,6 +1612,10 @@ mod key_tests {
                 &["parallel_min_particles", "line 2"],
             ),
             ("[simulation.wind]\nseed = -1", &["seed", "line 2"]),
+            (
+                "[simulation.wind]\nsubsteps_per_update = 4",
+                &["substeps_per_update", "became `renewal_interval`", "line 2"],
+            ),
             (
                 "[simulation.wind]\nper_substep = 1",
                 &["per_substep", "line 2"],
