@@ -517,6 +517,17 @@ fn coverage_difference_vanishes_for_identical_runs_only() {
     assert!(d > 0.0 && d.is_finite(), "{d}");
 }
 
+/// The bits of every position of every snapshot of a reference's trajectory.
+fn position_bits(reference: &sheer_study::Reference) -> Vec<u64> {
+    reference
+        .trajectory
+        .snapshots
+        .iter()
+        .flat_map(|s| s.positions.iter().flat_map(|p| p.to_array()))
+        .map(f64::to_bits)
+        .collect()
+}
+
 #[test]
 fn the_reference_is_bit_reproducible() {
     // Two study runs of the same scene must produce the same reference bit for bit (the simulator is
@@ -532,15 +543,7 @@ fn the_reference_is_bit_reproducible() {
     let first = reference(&scene, &config.choice_times, &monitor).unwrap();
     let second = reference(&scene, &config.choice_times, &monitor).unwrap();
     assert_eq!(first.method, second.method);
-    let bits = |r: &sheer_study::Reference| -> Vec<u64> {
-        r.trajectory
-            .snapshots
-            .iter()
-            .flat_map(|s| s.positions.iter().flat_map(|p| p.to_array()))
-            .map(f64::to_bits)
-            .collect()
-    };
-    assert_eq!(bits(&first), bits(&second));
+    assert_eq!(position_bits(&first), position_bits(&second));
     assert_eq!(first.trajectory.coverage, second.trajectory.coverage);
     assert_eq!(first.halving, second.halving);
     assert!(first.coverage_halving.unwrap() >= 0.0);
@@ -557,16 +560,7 @@ fn the_reference_renews_the_wind_however_the_scene_holds_it() {
         .unwrap();
     let times = [0.1];
     let monitor = Monitor::hidden();
-    let bits = |scene: &Scene| -> Vec<u64> {
-        reference(scene, &times, &monitor)
-            .unwrap()
-            .trajectory
-            .snapshots
-            .iter()
-            .flat_map(|s| s.positions.iter().flat_map(|p| p.to_array()))
-            .map(f64::to_bits)
-            .collect()
-    };
+    let bits = |scene: &Scene| position_bits(&reference(scene, &times, &monitor).unwrap());
     let mut renewed = scene.clone();
     renewed.params.wind.renewal_interval = 0.0;
     let expected = bits(&renewed);
