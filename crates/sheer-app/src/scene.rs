@@ -424,10 +424,66 @@ fn finite3(key: &str, v: [f32; 3]) -> Result<(), CliError> {
     )
 }
 
+/// The scene `text` describes, every key it leaves out taking the default scene's value, as the default
+/// scene file promises. Serde alone fills a key left out of a table the file does write from that
+/// table's own type: a file with a `[simulation]` table got `SimParams::default()`'s calmer wind with
+/// gusts of 0.3 and no hold, not the waving flag's (`SimParams::waving_flag`). One exception: with
+/// `wind.per_substep = false` a left-out `wind.renewal_interval` is 0, the only value that goes with it.
+/// `text` has been read as a scene already, so its keys and values are known to be valid.
+fn with_default_scene_values(text: &str) -> Result<Scene, CliError> {
+    let unexpected = |e: &dyn std::fmt::Display| CliError::new(format!("scene: {e}"));
+    let given: toml::Table = text.parse().map_err(|e| unexpected(&e))?;
+    let mut values = match toml::Value::try_from(Scene::default()) {
+        Ok(toml::Value::Table(values)) => values,
+        Ok(other) => return Err(unexpected(&format!("the default scene wrote {other}"))),
+        Err(e) => return Err(unexpected(&e)),
+    };
+    // Holding the wind for the whole frame goes with no renewal interval: left out, it is 0 there.
+    let wind_key = |table: &toml::Table, key: &str| {
+        let wind = table.get("simulation")?.get("wind")?;
+        wind.get(key).cloned()
+    };
+    let per_frame = wind_key(&given, "per_substep") == Some(toml::Value::Boolean(false))
+        && wind_key(&given, "renewal_interval").is_none();
+    lay_over(&mut values, given, "");
+    if per_frame {
+        let wind = values
+            .get_mut("simulation")
+            .and_then(|s| s.get_mut("wind"))
+            .and_then(|w| w.as_table_mut());
+        if let Some(wind) = wind {
+            wind.insert("renewal_interval".into(), toml::Value::Float(0.0));
+        }
+    }
+    toml::Value::Table(values)
+        .try_into()
+        .map_err(|e| unexpected(&e))
+}
+
+/// Lays `given` over `values` key by key and into sub-tables, except a given `simulation.method`, which
+/// replaces the default's whole (a method names its kind and every knob of that kind).
+fn lay_over(values: &mut toml::Table, given: toml::Table, prefix: &str) {
+    for (key, value) in given {
+        let path = format!("{prefix}{key}");
+        match (values.get_mut(&key), value) {
+            (Some(toml::Value::Table(inner)), toml::Value::Table(value))
+                if path != "simulation.method" =>
+            {
+                lay_over(inner, value, &format!("{path}."));
+            }
+            (_, value) => {
+                values.insert(key, value);
+            }
+        }
+    }
+}
+
 impl Scene {
-    /// Parses a scene from TOML text; relative paths resolve against `base_dir`.
+    /// Parses a scene from TOML text; relative paths resolve against `base_dir`. A key the text leaves
+    /// out takes the default scene's value (`assets/default.scene.toml`, [`Scene::default`]).
     pub fn from_toml(text: &str, base_dir: &Path) -> Result<Scene, CliError> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| {
+        // Read as written first, so that a bad key, type or value is reported with its line.
+        let as_written: Scene = toml::from_str(text).map_err(|e| {
             let message = e.message().trim();
             // A key earlier versions wrote: say what replaced it, not only that it is unknown.
             let hint = if message.starts_with("unknown field `substeps_per_update`") {
@@ -438,9 +494,10 @@ impl Scene {
             };
             CliError::new(format!("scene: {message}{hint}")).with_span(text, e.span())
         })?;
+        check_silent_conversions(text, &as_written)?;
+        let mut scene = with_default_scene_values(text)?;
         scene.base_dir = base_dir.to_path_buf();
         scene.builtin_assets = false;
-        check_silent_conversions(text, &scene)?;
         scene.validate()?;
         Ok(scene)
     }
@@ -1045,24 +1102,80 @@ mod key_tests {
         format!("[{section}]\n{key} = {value}\n")
     }
 
+    /// The value at a dotted `path` of a TOML table, to be replaced.
+    fn lookup_mut<'a>(table: &'a mut toml::Table, path: &str) -> Option<&'a mut toml::Value> {
+        let (head, rest) = path.split_once('.').unwrap_or((path, ""));
+        let value = table.get_mut(head)?;
+        if rest.is_empty() {
+            Some(value)
+        } else {
+            lookup_mut(value.as_table_mut()?, rest)
+        }
+    }
+
     #[test]
     fn every_key_is_accepted_and_lands_in_the_scene() {
         for (path, value) in EVERY_KEY {
             let text = one_key(path, value);
             let scene = parse(&text).unwrap_or_else(|e| panic!("{text}: {e}"));
-            let written: toml::Table = toml::from_str(&scene.to_toml()).unwrap();
+            let mut written: toml::Table = toml::from_str(&scene.to_toml()).unwrap();
             let expected: toml::Table = toml::from_str(&format!("v = {value}")).unwrap();
             assert_eq!(lookup(&written, path), Some(&expected["v"]), "{text}");
             let default: toml::Table = toml::from_str(
                 &Scene {
-                    static_sheet: Some(StaticSheet::default()),
+                    static_sheet: path.starts_with("static_sheet.").then(StaticSheet::default),
                     ..Scene::default()
                 }
                 .to_toml(),
             )
             .unwrap();
             assert_ne!(lookup(&default, path), Some(&expected["v"]), "{path}");
+            // Every other key is the default scene's, as `assets/default.scene.toml` promises: not
+            // the default of the key's own table, which for the wind is the library's calmer one.
+            match lookup(&default, path) {
+                Some(value) => *lookup_mut(&mut written, path).unwrap() = value.clone(),
+                // A key the default leaves out (an optional texture).
+                None => {
+                    let (table, key) = path.rsplit_once('.').unwrap();
+                    let table = lookup_mut(&mut written, table).unwrap();
+                    table.as_table_mut().unwrap().remove(key);
+                }
+            }
+            if *path == "simulation.wind.per_substep" {
+                // Held for the whole frame, the wind has no renewal interval.
+                let interval =
+                    lookup_mut(&mut written, "simulation.wind.renewal_interval").unwrap();
+                assert_eq!(*interval, toml::Value::Float(0.0));
+                *interval = lookup(&default, "simulation.wind.renewal_interval")
+                    .unwrap()
+                    .clone();
+            }
+            assert_eq!(written, default, "{text}");
         }
+    }
+
+    #[test]
+    fn a_table_given_in_part_keeps_the_default_scene_values_of_the_rest() {
+        let flag = Scene::default().simulation;
+        // A `[simulation]` table of one key leaves the waving flag's wind alone.
+        let scene = parse("[simulation]\nair_damping = 0.1").unwrap();
+        assert_eq!(scene.simulation.air_damping, 0.1);
+        assert_eq!(scene.simulation.wind, flag.wind);
+        // A `[simulation.wind]` table of one key leaves its gusts and its hold alone.
+        let scene = parse("[simulation.wind]\nseed = 7").unwrap();
+        assert_eq!(scene.simulation.wind.seed, 7);
+        assert_eq!(scene.simulation.wind.gust_strength, flag.wind.gust_strength);
+        assert_eq!(
+            scene.simulation.wind.renewal_interval,
+            flag.wind.renewal_interval
+        );
+        assert!(flag.wind.renewal_interval > 0.0 && flag.wind.gust_strength != 0.3);
+        // A method replaces the default's whole, knobs and all.
+        let scene = parse("[simulation.method]\nkind = \"verlet\"\nsubsteps = 100").unwrap();
+        assert_eq!(
+            scene.simulation.method,
+            sheer_cloth::Method::Verlet { substeps: 100 }
+        );
     }
 
     #[test]
