@@ -487,8 +487,9 @@ impl Scene {
             let message = e.message().trim();
             // A key earlier versions wrote: say what replaced it, not only that it is unknown.
             let hint = if message.starts_with("unknown field `substeps_per_update`") {
-                "; `substeps_per_update` (a count of sub-steps) became `renewal_interval`, the longest \
-                 time the forces are held, in seconds (4 of 40 sub-steps at 60 Hz: 4/2400 s)"
+                "; `wind.substeps_per_update` (a count of sub-steps) became `wind.renewal_interval`, \
+                 the longest time the wind's forces are held, in seconds (4 of 40 sub-steps at 60 Hz: \
+                 4/2400 s, about 0.00167; it is rounded down to whole sub-steps)"
             } else {
                 ""
             };
@@ -1727,7 +1728,12 @@ mod key_tests {
             ("[simulation.wind]\nseed = -1", &["seed", "line 2"]),
             (
                 "[simulation.wind]\nsubsteps_per_update = 4",
-                &["substeps_per_update", "became `renewal_interval`", "line 2"],
+                &[
+                    "substeps_per_update",
+                    "became `wind.renewal_interval`",
+                    "0.00167",
+                    "line 2",
+                ],
             ),
             (
                 "[simulation.wind]\nper_substep = 1",

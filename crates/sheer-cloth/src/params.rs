@@ -548,8 +548,8 @@ pub struct SimParams {
     /// may not move further from its nearest pinned particle than at rest. Gauss–Seidel needs about as many
     /// sweeps as the cloth is particles long to carry a load from the pole to the fly end; the tethers
     /// carry it in one, so a hanging flag does not stretch like rubber at 20 sweeps per frame (the
-    /// default flag in still air: a 99th-percentile stretch strain of 0.021 with them, 0.119 without;
-    /// `examples/hanging_stretch.rs`).
+    /// default flag released in still air: a 99th-percentile stretch strain of at most 0.021 with them,
+    /// 0.119 without; `examples/hanging_stretch.rs`).
     pub long_range_attachments: bool,
     pub divergence: DivergenceLimits,
     /// Below this many particles every pass runs on one thread. From it, the passes run on rayon's pool,

@@ -144,12 +144,13 @@ fn realistic_fabric_flag_runs_at_60_hz_with_the_default_method() {
 
 #[test]
 fn long_range_attachments_keep_a_hanging_flag_from_stretching() {
-    // The app's default flag in still air for 2 s. Gauss–Seidel carries the fly end's weight to the
-    // pole one constraint per sweep, so with 20 or 40 sweeps a frame the rows near the pole stretch like
-    // rubber; the attachments hold every particle within its rest distance of its nearest pin. A woven
-    // flag stretches about a per cent under its own weight. (Measured over 5 s by `cargo run -p
-    // sheer-cloth --release --example hanging_stretch`: the largest 99th percentile of the stretch
-    // strain 0.021 with them and 0.119 without at ×20, 0.0064 and 0.044 at ×40.)
+    // The app's default flag in still air for 2 s, released from rest. Gauss–Seidel carries the fly
+    // end's weight to the pole one constraint per sweep, so with 20 or 40 sweeps a frame its springs
+    // stretch as it falls; the attachments hold every particle within its rest distance of its nearest
+    // pin. A woven flag stretches about a per cent under its own weight; 3 % allows for the fall.
+    // (Measured over 5 s by `cargo run -p sheer-cloth --release --example hanging_stretch`: the largest
+    // 99th percentile of the stretch strain 0.021 with them and 0.119 without at ×20, 0.0064 and 0.044
+    // at ×40, all reached within the first 2 s.)
     let largest_p99_stretch = |substeps: u32, attachments: bool| {
         let mut params = SimParams::waving_flag();
         params.method = Method::SmallStepsXpbd { substeps };
@@ -170,6 +171,7 @@ fn long_range_attachments_keep_a_hanging_flag_from_stretching() {
     for substeps in [20, 40] {
         let with = largest_p99_stretch(substeps, true);
         let without = largest_p99_stretch(substeps, false);
+        assert!(with.is_finite() && without.is_finite(), "{with} {without}");
         assert!(with < 0.03, "x{substeps} with attachments: {with}");
         // The failure the attachments prevent, asserted so that it cannot go unnoticed.
         assert!(
