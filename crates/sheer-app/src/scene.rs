@@ -273,7 +273,14 @@ pub struct Scene {
     /// the file.
     #[serde(skip)]
     pub builtin_assets: bool,
+    /// Image keys the scene file left out ([`DEFAULT_IMAGE_KEYS`]): their default images are read from
+    /// those built into the binary, wherever the file lies. Not in the file.
+    #[serde(skip)]
+    pub builtin_images: Vec<&'static str>,
 }
+
+/// The keys whose default value names one of the default scene's images ([`BUILTIN_ASSETS`]).
+pub const DEFAULT_IMAGE_KEYS: [&str; 2] = ["shading.albedo_texture", "background.image"];
 
 /// The shipped default scene, built into the binary (every key is documented there).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../../assets/default.scene.toml");
@@ -306,6 +313,7 @@ impl Default for Scene {
             static_sheet: None,
             base_dir: PathBuf::new(),
             builtin_assets: true,
+            builtin_images: Vec::new(),
         }
     }
 }
@@ -499,6 +507,16 @@ impl Scene {
         let mut scene = with_default_scene_values(text)?;
         scene.base_dir = base_dir.to_path_buf();
         scene.builtin_assets = false;
+        // A left-out image is the default scene's, which the binary carries: a scene file of a few
+        // keys in any folder shows the flag and the painting.
+        let given: toml::Table = text.parse().unwrap_or_default();
+        scene.builtin_images = DEFAULT_IMAGE_KEYS
+            .into_iter()
+            .filter(|key| {
+                let (table, name) = key.split_once('.').unwrap_or(("", key));
+                given.get(table).and_then(|t| t.get(name)).is_none()
+            })
+            .collect();
         scene.validate()?;
         Ok(scene)
     }
@@ -538,7 +556,8 @@ impl Scene {
         key: &str,
         relative: &str,
     ) -> Result<std::borrow::Cow<'static, [u8]>, CliError> {
-        if self.builtin_assets {
+        let built_in = |name: &str| BUILTIN_ASSETS.iter().any(|(n, _)| *n == name);
+        if self.builtin_assets || (self.builtin_images.contains(&key) && built_in(relative)) {
             return BUILTIN_ASSETS
                 .iter()
                 .find(|(name, _)| *name == relative)
@@ -856,6 +875,7 @@ mod tests {
         let default = Scene {
             base_dir: assets(),
             builtin_assets: false,
+            builtin_images: DEFAULT_IMAGE_KEYS.to_vec(),
             ..Scene::default()
         };
         assert_eq!(parse("").unwrap(), default);
@@ -1841,6 +1861,41 @@ mod key_tests {
             let text = format!("{section}\nbogus_key = 1");
             assert_refused(&text, &["bogus_key"]);
         }
+    }
+
+    #[test]
+    fn images_a_scene_file_leaves_out_are_the_built_in_ones_wherever_it_lies() {
+        // A scene file in a folder without the default images.
+        let folder =
+            std::env::temp_dir().join(format!("sheer-builtin-images-{}", std::process::id()));
+        std::fs::create_dir_all(&folder).unwrap();
+        let scene = Scene::from_toml("[simulation]\nair_damping = 0.1", &folder).unwrap();
+        for key in DEFAULT_IMAGE_KEYS {
+            let name = match key {
+                "shading.albedo_texture" => scene.shading.albedo_texture.clone().unwrap(),
+                _ => scene.background.image.clone().unwrap(),
+            };
+            let bytes = scene.read_asset(key, &name).unwrap();
+            assert_eq!(
+                &*bytes,
+                std::fs::read(assets().join(&name)).unwrap(),
+                "{key}"
+            );
+        }
+        // An image the file names is read from the file's folder, even the default's name.
+        let scene =
+            Scene::from_toml("[shading]\nalbedo_texture = \"faroe_flag.png\"", &folder).unwrap();
+        let error = scene
+            .read_asset("shading.albedo_texture", "faroe_flag.png")
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("cannot read"), "{error}");
+        assert!(
+            scene
+                .read_asset("background.image", "faroe_landscape.png")
+                .is_ok()
+        );
+        std::fs::remove_dir_all(&folder).ok();
     }
 
     #[test]
