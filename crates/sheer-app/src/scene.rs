@@ -434,8 +434,8 @@ fn finite3(key: &str, v: [f32; 3]) -> Result<(), CliError> {
 
 /// The scene `text` describes, every key it leaves out taking the default scene's value, as the default
 /// scene file promises. Serde alone fills a key left out of a table the file does write from that
-/// table's own type: a file with a `[simulation]` table got `SimParams::default()`'s calmer wind with
-/// gusts of 0.3 and no hold, not the waving flag's (`SimParams::waving_flag`). One exception: with
+/// table's own type: a file with a `[simulation]` table got `SimParams::default()`'s wind, which is
+/// still air, not the waving flag's (`SimParams::waving_flag`). One exception: with
 /// `wind.per_substep = false` a left-out `wind.renewal_interval` is 0, the only value that goes with it.
 /// `text` has been read as a scene already, so its keys and values are known to be valid.
 fn with_default_scene_values(text: &str) -> Result<Scene, CliError> {
@@ -1152,7 +1152,7 @@ mod key_tests {
             .unwrap();
             assert_ne!(lookup(&default, path), Some(&expected["v"]), "{path}");
             // Every other key is the default scene's, as `assets/default.scene.toml` promises: not
-            // the default of the key's own table, which for the wind is the library's calmer one.
+            // the default of the key's own table, which for the wind is the library's still air.
             match lookup(&default, path) {
                 Some(value) => *lookup_mut(&mut written, path).unwrap() = value.clone(),
                 // A key the default leaves out (an optional texture).
