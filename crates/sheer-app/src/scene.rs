@@ -438,6 +438,10 @@ fn finite3(key: &str, v: [f32; 3]) -> Result<(), CliError> {
 /// still air, not the waving flag's (`SimParams::waving_flag`). One exception: with
 /// `wind.per_substep = false` a left-out `wind.renewal_interval` is 0, the only value that goes with it.
 /// `text` has been read as a scene already, so its keys and values are known to be valid.
+///
+/// A left-out image key ([`DEFAULT_IMAGE_KEYS`]) names an image built into the binary
+/// ([`Scene::builtin_images`]), so that a scene file of a few keys in any folder shows the flag and the
+/// painting.
 fn with_default_scene_values(text: &str) -> Result<Scene, CliError> {
     let unexpected = |e: &dyn std::fmt::Display| CliError::new(format!("scene: {e}"));
     let given: toml::Table = text.parse().map_err(|e| unexpected(&e))?;
@@ -446,13 +450,14 @@ fn with_default_scene_values(text: &str) -> Result<Scene, CliError> {
         Ok(other) => return Err(unexpected(&format!("the default scene wrote {other}"))),
         Err(e) => return Err(unexpected(&e)),
     };
+    let builtin_images: Vec<&'static str> = DEFAULT_IMAGE_KEYS
+        .into_iter()
+        .filter(|key| value_at(&given, key).is_none())
+        .collect();
     // Holding the wind for the whole frame goes with no renewal interval: left out, it is 0 there.
-    let wind_key = |table: &toml::Table, key: &str| {
-        let wind = table.get("simulation")?.get("wind")?;
-        wind.get(key).cloned()
-    };
-    let per_frame = wind_key(&given, "per_substep") == Some(toml::Value::Boolean(false))
-        && wind_key(&given, "renewal_interval").is_none();
+    let per_frame = value_at(&given, "simulation.wind.per_substep")
+        == Some(&toml::Value::Boolean(false))
+        && value_at(&given, "simulation.wind.renewal_interval").is_none();
     lay_over(&mut values, given, "");
     if per_frame {
         let wind = values
@@ -463,9 +468,22 @@ fn with_default_scene_values(text: &str) -> Result<Scene, CliError> {
             wind.insert("renewal_interval".into(), toml::Value::Float(0.0));
         }
     }
-    toml::Value::Table(values)
+    let mut scene: Scene = toml::Value::Table(values)
         .try_into()
-        .map_err(|e| unexpected(&e))
+        .map_err(|e| unexpected(&e))?;
+    scene.builtin_images = builtin_images;
+    Ok(scene)
+}
+
+/// The value at a dotted `path` (`simulation.wind.seed`) of a TOML table.
+fn value_at<'a>(table: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
+    let (head, rest) = path.split_once('.').unwrap_or((path, ""));
+    let value = table.get(head)?;
+    if rest.is_empty() {
+        Some(value)
+    } else {
+        value_at(value.as_table()?, rest)
+    }
 }
 
 /// Lays `given` over `values` key by key and into sub-tables, except a given `simulation.method`, which
@@ -507,16 +525,6 @@ impl Scene {
         let mut scene = with_default_scene_values(text)?;
         scene.base_dir = base_dir.to_path_buf();
         scene.builtin_assets = false;
-        // A left-out image is the default scene's, which the binary carries: a scene file of a few
-        // keys in any folder shows the flag and the painting.
-        let given: toml::Table = text.parse().unwrap_or_default();
-        scene.builtin_images = DEFAULT_IMAGE_KEYS
-            .into_iter()
-            .filter(|key| {
-                let (table, name) = key.split_once('.').unwrap_or(("", key));
-                given.get(table).and_then(|t| t.get(name)).is_none()
-            })
-            .collect();
         scene.validate()?;
         Ok(scene)
     }
@@ -1026,16 +1034,7 @@ mod key_tests {
         Scene::from_toml(text, &assets()).map_err(|e| e.to_string())
     }
 
-    /// The value at a dotted `path` of a TOML table.
-    fn lookup<'a>(table: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
-        let (head, rest) = path.split_once('.').unwrap_or((path, ""));
-        let value = table.get(head)?;
-        if rest.is_empty() {
-            Some(value)
-        } else {
-            lookup(value.as_table()?, rest)
-        }
-    }
+    use super::value_at as lookup;
 
     /// Every leaf key of a TOML table, dotted.
     fn leaf_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
