@@ -54,13 +54,33 @@ pub(crate) struct PackedConstraint {
 const MIN_PARALLEL_BATCH: usize = 2048;
 
 /// A grid's sweeps run as one wavefront from this many particles: below it the cloth's data largely
-/// stays in the last-level cache from pass to pass, and pass by pass measured as fast or faster (crate
-/// README, "One pass per sub-step").
-const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
+/// stays in the last-level cache from pass to pass, and pass by pass measured as fast (256 × 256) or
+/// faster (181 × 181); at 362 × 362 the wavefront of several sub-steps a pass took 0.69–0.80× as long
+/// on one thread (crate README, "Several sub-steps a pass").
+const WAVEFRONT_MIN_PARTICLES: usize = 98_304;
 
 /// With threads, the wavefront needs this many rows per thread per row of its depth: the seams around
-/// the cuts between the threads' parts, twice the depth each, run on one thread each.
-const WAVEFRONT_ROWS_PER_DEPTH: usize = 10;
+/// the cuts between the threads' parts, twice the depth each, run on one thread each. (10 before passes
+/// of several sub-steps; 6 lets 512 × 372 take two a pass on two threads: 0.79–0.84× as long.)
+const WAVEFRONT_ROWS_PER_DEPTH: usize = 6;
+
+/// A whole step's wavefront takes as many sub-steps a pass as keep each thread's rows in flight within
+/// about this many bytes of the last-level cache: measured best at 2 sub-steps a pass on 1024 columns
+/// and 4 on 512 (6.5 MB each; crate README, "Several sub-steps a pass").
+const WAVEFRONT_WINDOW_BYTES: usize = 7 << 20;
+
+/// About what a particle of a grid takes in the arrays a sub-step reads: positions, start positions
+/// and velocities (72 bytes), mass and inverse mass (16), the wind's shares of its two cells (48), six
+/// constraints' rest lengths and inverted divisors (96), its attachment (12).
+const SUBSTEP_BYTES_PER_PARTICLE: usize = 244;
+
+/// How many of a step's `substeps` sub-steps one pass of the wavefront runs on a grid of `columns`
+/// columns, when a sub-step keeps `substep_depth` rows in flight: as many as fit
+/// [`WAVEFRONT_WINDOW_BYTES`], at least one. (With threads the seams bound it further.)
+fn substeps_in_flight(columns: usize, substep_depth: usize, substeps: usize) -> usize {
+    let substep_bytes = substep_depth * columns * SUBSTEP_BYTES_PER_PARTICLE;
+    (WAVEFRONT_WINDOW_BYTES / substep_bytes.max(1)).clamp(1, substeps.max(1))
+}
 
 thread_local! {
     /// One row of a grid's forces (N), copied from the cloth's and used by the prediction of that row on
@@ -475,6 +495,11 @@ impl Simulation {
     /// 3 µs of each 50 µs sub-step (`rdtsc` around the passes, a temporary instrumentation). In one pass
     /// the sub-steps follow each other like the stages within one: a part waits for its neighbour only
     /// where their rows meet. Same bits as sub-step by sub-step (tested).
+    ///
+    /// A large grid's whole step goes as wavefronts instead ([`Wavefront`]), each pass running as many
+    /// sub-steps one behind the other as keep the rows in flight within [`WAVEFRONT_WINDOW_BYTES`]:
+    /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
+    /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass").
     pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
         let (iterations, pbd_stiffness) = match self.params.method {
             Method::Pbd {
@@ -488,16 +513,24 @@ impl Simulation {
         };
         let multipliers = iterations > 1 && pbd_stiffness.is_none();
         let small = self.positions.len() < WAVEFRONT_MIN_PARTICLES;
-        let eligible = !multipliers
-            && self.grid_constraints.is_some()
-            && self.parallel()
+        // A small grid's step as one pass of a team; a large grid's as wavefronts of several sub-steps.
+        let pipeline = self.parallel()
             && team_in_equal_parts().is_some()
             && match self.grid_sweep {
                 GridSweep::Pipeline => true,
                 GridSweep::Auto => small,
                 _ => false,
-            }
+            };
+        let wavefront = match self.grid_sweep {
+            GridSweep::Wavefront { .. } => true,
+            GridSweep::Auto => !small,
+            _ => false,
+        };
+        let eligible = !multipliers
+            && self.grid_constraints.is_some()
+            && (pipeline || wavefront)
             && !(self.wind_acts() && self.grid_triangulation.is_none());
+        self.wavefront_substeps_per_pass = 0;
         if !eligible {
             return false;
         }
@@ -824,6 +857,7 @@ impl Simulation {
             grid_sweep,
             progress,
             pipeline_plan,
+            wavefront_substeps_per_pass,
             ..
         } = self
         else {
@@ -873,49 +907,94 @@ impl Simulation {
         let this_substep = [renew];
         let renewals = step.map_or(&this_substep[..], |step| &step.renewals[..]);
         // The sub-step as one wavefront: the wind's shares (when due) and the prediction, then the batches
-        // of every sweep, each sweep followed by its end.
+        // of every sweep, each sweep followed by its end. A whole step's sub-steps go a few at a time,
+        // each pass of the wavefront running several sub-steps one behind the other.
         let wavefront = 'plan: {
             // Decided before the plan is built, so that a small cloth's sub-step builds none.
-            let parts = match sweep_order {
-                _ if step.is_some() => break 'plan None,
+            let (parts, forced_per_pass) = match sweep_order {
                 GridSweep::Passes | GridSweep::BatchByBatch | GridSweep::Pipeline => {
                     break 'plan None;
                 }
-                GridSweep::Wavefront { parts } => parts,
+                GridSweep::Wavefront {
+                    parts,
+                    substeps_per_pass,
+                } => (parts, Some(substeps_per_pass)),
                 // Once the cloth outgrows the caches (and, below, with threads only when the seams,
                 // which run on one thread each, are a small share of the rows).
                 GridSweep::Auto if inverse_masses.len() < WAVEFRONT_MIN_PARTICLES => {
                     break 'plan None;
                 }
-                GridSweep::Auto => threads,
+                GridSweep::Auto => (threads, None),
             };
-            let items = WaveItem::of_substep(
-                renew.is_some(),
-                by_last_row,
-                iterations,
-                if params.long_range_attachments {
-                    *tether_row_reach
-                } else {
-                    0
-                },
-            );
-            let plan = Wavefront::new(items.iter().map(|(_, span)| *span).collect(), rows);
-            if sweep_order == GridSweep::Auto
-                && threads > 1
-                && rows < WAVEFRONT_ROWS_PER_DEPTH * threads * plan.depth()
-            {
+            let reach = if params.long_range_attachments {
+                *tether_row_reach
+            } else {
+                0
+            };
+            // The items of sub-steps `substeps`, one after another.
+            let items_of = |substeps: Range<usize>| -> Vec<(WaveItem, usize)> {
+                substeps
+                    .flat_map(|s| {
+                        WaveItem::of_substep(
+                            s,
+                            renewals[s].is_some(),
+                            by_last_row,
+                            iterations,
+                            reach,
+                        )
+                    })
+                    .collect()
+            };
+            let spans_of =
+                |items: &[(WaveItem, usize)]| items.iter().map(|(_, span)| *span).collect();
+            let one = items_of(0..1);
+            // A sub-step can follow another in the same pass only with its prediction among the items
+            // (its attachments' pins near enough).
+            if step.is_some() && !WaveItem::predict(&one) {
                 break 'plan None;
             }
-            // A test's fixed order: refusing it would let the test compare pass by pass with itself.
-            if let GridSweep::Wavefront { parts } = sweep_order {
-                assert!(plan.fits(parts), "{parts} parts do not fit {rows} rows");
+            let substep_count = renewals.len();
+            let mut per_pass = match forced_per_pass {
+                Some(per_pass) => per_pass.clamp(1, substep_count),
+                None => substeps_in_flight(
+                    columns,
+                    Wavefront::new(spans_of(&one), rows).depth() + 1,
+                    substep_count,
+                ),
+            };
+            loop {
+                let passes: Vec<(Wavefront, Vec<(WaveItem, usize)>)> = (0..substep_count)
+                    .step_by(per_pass)
+                    .map(|first| {
+                        let items = items_of(first..(first + per_pass).min(substep_count));
+                        (Wavefront::new(spans_of(&items), rows), items)
+                    })
+                    .collect();
+                let fit = passes.iter().all(|(plan, _)| {
+                    plan.fits(parts)
+                        && !(sweep_order == GridSweep::Auto
+                            && threads > 1
+                            && rows < WAVEFRONT_ROWS_PER_DEPTH * threads * plan.depth())
+                });
+                if fit {
+                    break 'plan Some((passes, parts));
+                }
+                if per_pass == 1 {
+                    // A test's fixed order: refusing it would let the test compare pass by pass with
+                    // itself (a whole step that does not fit goes sub-step by sub-step, and is checked
+                    // there).
+                    if let GridSweep::Wavefront { parts, .. } = sweep_order {
+                        assert!(step.is_some(), "{parts} parts do not fit {rows} rows");
+                    }
+                    break 'plan None;
+                }
+                per_pass -= 1;
             }
-            plan.fits(parts).then_some((plan, parts, items))
         };
         // Whether the wavefront does the wind and the prediction itself.
         let prediction_in_wavefront = wavefront
             .as_ref()
-            .is_some_and(|(_, _, items)| matches!(items[0].0, WaveItem::Wind | WaveItem::Predict));
+            .is_some_and(|(passes, _)| WaveItem::predict(&passes[0].1));
         // The whole sub-step as one hand-off to a team whose threads each keep their own rows.
         let pipeline = 'plan: {
             let team = parallel.then(team_in_equal_parts).flatten();
@@ -954,8 +1033,9 @@ impl Simulation {
             }
             pipeline_plan.plan.as_ref()
         };
-        // A whole step goes only as one pipelined pass; the caller steps sub-step by sub-step otherwise.
-        if step.is_some() && pipeline.is_none() {
+        // A whole step goes only as one pipelined pass or as wavefronts of several sub-steps; the caller
+        // steps sub-step by sub-step otherwise.
+        if step.is_some() && pipeline.is_none() && wavefront.is_none() {
             return false;
         }
         if pipeline.is_none()
@@ -1204,30 +1284,49 @@ impl Simulation {
                 }
             });
         }
-        if let Some((plan, parts_count, items)) = wavefront {
-            let run_item = |item: usize, row: usize| match items[item].0 {
-                // Last row `row` of the cell row above it (none above the first row).
-                WaveItem::Wind => {
-                    if row > 0 {
-                        wind_cell_rows(renew, row - 1..row)
+        if let Some((passes, parts_count)) = wavefront {
+            if step.is_some() {
+                *wavefront_substeps_per_pass = passes
+                    .iter()
+                    .map(|(_, items)| {
+                        items
+                            .iter()
+                            .filter(|(item, _)| matches!(item, WaveItem::End { last: true, .. }))
+                            .count()
+                    })
+                    .max()
+                    .unwrap_or(0);
+            }
+            for (plan, items) in &passes {
+                let run_item = |item: usize, row: usize| match items[item].0 {
+                    // Last row `row` of the cell row above it (none above the first row).
+                    WaveItem::Wind { substep } => {
+                        if row > 0 {
+                            wind_cell_rows(renewals[substep], row - 1..row)
+                        }
                     }
-                }
-                WaveItem::Predict => predict_row(tethers_of(0), row),
-                WaveItem::Batch(batch) => project_these(strips_of_rows(batch, row..row + 1)),
-                WaveItem::End { last } => end_row(tethers_of(0), row, last),
-            };
-            // Each part's own strips need nothing across a cut, so the parts run at once; the seams
-            // around the cuts need both neighbours' parts done, and touch disjoint rows of their own.
-            // Both passes have one index per part, so that each thread of the team takes one (seam `s`
-            // lies at the top of part `s`, and part 0 has none).
-            parts(parts_count, parallel, 1, |part| {
-                part.for_each(|p| plan.run_part(p, parts_count, run_item))
-            });
-            parts(parts_count, parallel, 1, |seams| {
-                seams
-                    .filter(|&s| s > 0)
-                    .for_each(|s| plan.run_seam(s, parts_count, run_item))
-            });
+                    WaveItem::Predict { substep } => predict_row(tethers_of(substep), row),
+                    WaveItem::Batch(batch) => project_these(strips_of_rows(batch, row..row + 1)),
+                    WaveItem::End { substep, last } => {
+                        end_row(tethers_of(substep), row, last);
+                        if last && step.is_some() {
+                            move_pins_of_row(substep, row);
+                        }
+                    }
+                };
+                // Each part's own strips need nothing across a cut, so the parts run at once; the seams
+                // around the cuts need both neighbours' parts done, and touch disjoint rows of their
+                // own. Both passes have one index per part, so that each thread of the team takes one
+                // (seam `s` lies at the top of part `s`, and part 0 has none).
+                parts(parts_count, parallel, 1, |part| {
+                    part.for_each(|p| plan.run_part(p, parts_count, run_item))
+                });
+                parts(parts_count, parallel, 1, |seams| {
+                    seams
+                        .filter(|&s| s > 0)
+                        .for_each(|s| plan.run_seam(s, parts_count, run_item))
+                });
+            }
             return true;
         }
         for iteration in 0..iterations {
@@ -1252,13 +1351,14 @@ impl Simulation {
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum WaveItem {
     /// The wind's shares of the cell row above the row (span 1: the cell row joins two particle rows).
-    Wind,
+    Wind { substep: usize },
     /// The forces and the prediction of the row; the row's pins gathered for the attachments.
-    Predict,
+    Predict { substep: usize },
     /// The strips of a batch that end on the row.
     Batch(usize),
-    /// The end of a sweep on the row ([`end_sweep`]); `last`: the sub-step's last sweep.
-    End { last: bool },
+    /// The end of a sweep on the row ([`end_sweep`]); `last`: the sub-step's last sweep (in a whole
+    /// step's pass it also moves the row's pins on to the next sub-step).
+    End { substep: usize, last: bool },
 }
 
 impl WaveItem {
@@ -1270,7 +1370,10 @@ impl WaveItem {
     /// run at least that many rows ahead of the first sweep's end, which runs as many rows behind it as
     /// the batches' spans add up to (`wavefront.rs`: item `i` runs `lagᵢ` rows behind the first). If they
     /// do not, the prediction is a pass of its own before the wavefront (and the pins gathered after it).
+    ///
+    /// `substep` numbers the sub-step within its step, for a whole step in passes (0 for a lone sub-step).
     fn of_substep(
+        substep: usize,
         renew: bool,
         by_last_row: &[(Vec<Range<usize>>, usize)],
         sweeps: u32,
@@ -1280,17 +1383,24 @@ impl WaveItem {
         let mut items = Vec::new();
         if tether_row_reach <= lag_of_first_end {
             if renew {
-                items.push((WaveItem::Wind, 1));
+                items.push((WaveItem::Wind { substep }, 1));
             }
-            items.push((WaveItem::Predict, 0));
+            items.push((WaveItem::Predict { substep }, 0));
         }
         for sweep in 0..sweeps {
             let batches = by_last_row.iter().enumerate();
             items.extend(batches.map(|(batch, (_, span))| (WaveItem::Batch(batch), *span)));
             let last = sweep + 1 == sweeps;
-            items.push((WaveItem::End { last }, 0));
+            items.push((WaveItem::End { substep, last }, 0));
         }
         items
+    }
+
+    /// Whether the items run the sub-step's prediction (and the wind's shares) themselves.
+    fn predict(items: &[(WaveItem, usize)]) -> bool {
+        items
+            .iter()
+            .any(|(item, _)| matches!(item, WaveItem::Predict { .. }))
     }
 }
 
@@ -1560,6 +1670,13 @@ mod tests {
         threads: usize,
         frames: usize,
     ) -> (Vec<[u64; 3]>, Vec<[u64; 3]>) {
+        turning_pole(&mut sim, threads, frames);
+        state_bits(&sim)
+    }
+
+    /// `frames` frames of `sim` on a pool of `threads` threads, its pole turning a little further and
+    /// swaying every frame.
+    fn turning_pole(sim: &mut Simulation, threads: usize, frames: usize) {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -1575,7 +1692,6 @@ mod tests {
                 sim.step(1.0 / 60.0).unwrap();
             }
         });
-        state_bits(&sim)
     }
 
     /// A switched-off family's batches are skipped, and that gives the bits of projecting them with their
@@ -1707,7 +1823,13 @@ mod tests {
                 for threads in [1, parts.max(2)] {
                     assert_eq!(
                         passes,
-                        run(GridSweep::Wavefront { parts }, threads),
+                        run(
+                            GridSweep::Wavefront {
+                                parts,
+                                substeps_per_pass: 1
+                            },
+                            threads
+                        ),
                         "{method:?}: the wavefront in {parts} parts on {threads} threads"
                     );
                 }
@@ -1733,7 +1855,7 @@ mod tests {
             let slots = schedule(&Wavefront::new(spans_of(items), rows), parts);
             let predict = items
                 .iter()
-                .position(|(item, _)| *item == WaveItem::Predict);
+                .position(|(item, _)| matches!(item, WaveItem::Predict { .. }));
             let predict = predict.expect("the prediction is in the wavefront");
             items
                 .iter()
@@ -1751,8 +1873,8 @@ mod tests {
         for sweeps in [1, 2] {
             for renew in [true, false] {
                 for reach in 0..=12 {
-                    let items = WaveItem::of_substep(renew, by_last_row, sweeps, reach);
-                    let fused = items.iter().any(|(item, _)| *item == WaveItem::Predict);
+                    let items = WaveItem::of_substep(0, renew, by_last_row, sweeps, reach);
+                    let fused = WaveItem::predict(&items);
                     assert_eq!(fused, reach <= 10, "reach {reach}");
                     if !fused {
                         continue;
@@ -1774,7 +1896,7 @@ mod tests {
         assert!(checked > 100, "{checked} schedules checked");
         // The same items at a reach of 11: somewhere an end of a sweep would not follow a prediction it
         // reads.
-        let items = WaveItem::of_substep(true, by_last_row, 1, 10);
+        let items = WaveItem::of_substep(0, true, by_last_row, 1, 10);
         let broken = [40, 61, 131, 240].into_iter().any(|rows| {
             let plan = Wavefront::new(spans_of(&items), rows);
             (1..=6)
@@ -1831,8 +1953,11 @@ mod tests {
                     let mut sim = Simulation::new(model, params).unwrap();
                     assert_eq!(sim.tether_row_reach, reach);
                     let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
-                    let items = super::WaveItem::of_substep(true, by_last_row, 1, reach);
-                    assert_eq!(items[0].0 == super::WaveItem::Wind, in_wavefront);
+                    let items = super::WaveItem::of_substep(0, true, by_last_row, 1, reach);
+                    assert_eq!(
+                        items[0].0 == super::WaveItem::Wind { substep: 0 },
+                        in_wavefront
+                    );
                     if general {
                         sim.grid_triangulation = None; // summed into `forces` by the general path
                     }
@@ -1843,13 +1968,153 @@ mod tests {
                 for (parts, threads) in [(1, 1), (3, 1), (3, 3)] {
                     assert_eq!(
                         passes,
-                        run(GridSweep::Wavefront { parts }, threads),
+                        run(
+                            GridSweep::Wavefront {
+                                parts,
+                                substeps_per_pass: 1
+                            },
+                            threads
+                        ),
                         "reach {reach}, wind {speed} m/s every {interval}, general path \
                          {general}: {parts} parts on {threads} threads"
                     );
                 }
             }
         }
+    }
+
+    /// A whole step in wavefronts of several sub-steps a pass (the pins moved on and the wind renewed
+    /// inside the pass) gives the bits of pass by pass: small-steps XPBD and PBD, with the wind renewed
+    /// every sub-step, held for three and off, a turning and swaying pole, passes of 1, 2, 3 and up to
+    /// all sub-steps, in 1–3 parts on one thread and on as many as parts. Where a pass of that many
+    /// sub-steps does not fit the parts it takes fewer (checked to happen), and XPBD with multipliers
+    /// steps sub-step by sub-step.
+    #[test]
+    fn a_whole_step_in_wavefronts_of_several_sub_steps_gives_the_bits_of_pass_by_pass() {
+        use crate::sim::GridSweep;
+        let methods = [
+            Method::SmallStepsXpbd { substeps: 20 },
+            Method::Pbd {
+                substeps: 3,
+                iterations: 2,
+                stiffness: 1.0,
+            },
+            Method::Xpbd {
+                substeps: 2,
+                iterations: 2,
+            },
+        ];
+        let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
+        let rows = 133;
+        let mut fewer = 0;
+        for method in methods {
+            let whole_steps = !matches!(method, Method::Xpbd { .. });
+            for (speed, interval) in winds {
+                // The bits after eight frames, and the most sub-steps a pass of the last step ran.
+                let run = |sweep: GridSweep, threads: usize| {
+                    let mut sim = windy_flag(9, rows, 3.0, method, threads > 1);
+                    sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
+                    sim.params.wind.renewal_interval = held_for(interval, method);
+                    sim.grid_sweep = sweep;
+                    turning_pole(&mut sim, threads, 8);
+                    (state_bits(&sim), sim.wavefront_substeps_per_pass)
+                };
+                let (passes, none) = run(GridSweep::Passes, 1);
+                assert_eq!(none, 0, "pass by pass runs no wavefront");
+                for (parts, threads) in [(1, 1), (2, 2), (3, 1), (3, 3)] {
+                    for substeps_per_pass in [1, 2, 3, 20] {
+                        let sweep = GridSweep::Wavefront {
+                            parts,
+                            substeps_per_pass,
+                        };
+                        let (bits, per_pass) = run(sweep, threads);
+                        let what = format!(
+                            "{method:?}, wind {speed} m/s every {interval}: {parts} parts on \
+                             {threads} threads, up to {substeps_per_pass} sub-steps a pass"
+                        );
+                        assert_eq!(passes, bits, "{what}");
+                        let most = substeps_per_pass.min(method.substeps() as usize);
+                        if whole_steps {
+                            assert!((1..=most).contains(&per_pass), "{what}: {per_pass}");
+                            fewer += usize::from(per_pass < most);
+                            // One part of 133 rows holds three sub-steps of at most 11 rows each.
+                            if parts == 1 && substeps_per_pass <= 3 {
+                                assert_eq!(per_pass, most, "{what}");
+                            }
+                        } else {
+                            assert_eq!(per_pass, 0, "{what}: multipliers go sub-step by sub-step");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(fewer > 0, "some pass was cut down to fit its parts");
+    }
+
+    /// In a pass of several sub-steps the attachments of a sub-step read the pins' positions its
+    /// prediction gathered into one of two buffers, which the prediction two sub-steps later gathers
+    /// into again: in the schedule every attachment runs surely after the predictions within the reach
+    /// of its sub-step, and surely before those of the sub-step after next, for passes of two to four
+    /// sub-steps, with and without the wind, every reach that lets the prediction into the wavefront,
+    /// and every number of parts that fits.
+    #[test]
+    fn in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again() {
+        use super::WaveItem;
+        use crate::wavefront::Wavefront;
+        use crate::wavefront::tests::{before, schedule};
+        let sim = windy_flag(9, 20, 3.0, Method::default(), false);
+        let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
+        let mut checked = 0;
+        for substeps in 2..=4 {
+            for renew in [true, false] {
+                for reach in 0..=10 {
+                    let items: Vec<(WaveItem, usize)> = (0..substeps)
+                        .flat_map(|s| WaveItem::of_substep(s, renew, by_last_row, 1, reach))
+                        .collect();
+                    let spans: Vec<usize> = items.iter().map(|(_, span)| *span).collect();
+                    let find = |wanted: &dyn Fn(&WaveItem) -> bool| {
+                        items.iter().position(|(item, _)| wanted(item)).unwrap()
+                    };
+                    for rows in [61, 131, 240] {
+                        let plan = Wavefront::new(spans.clone(), rows);
+                        for parts in (1..=4).filter(|&parts| plan.fits(parts)) {
+                            let slots = schedule(&plan, parts);
+                            for s in 0..substeps {
+                                let predict =
+                                    find(&|item| *item == WaveItem::Predict { substep: s });
+                                let end = find(
+                                    &|item| matches!(item, WaveItem::End { substep, .. } if *substep == s),
+                                );
+                                let again = (s + 2 < substeps).then(|| {
+                                    find(&|item| *item == WaveItem::Predict { substep: s + 2 })
+                                });
+                                for row in 0..rows {
+                                    for pin_row in
+                                        row.saturating_sub(reach)..(row + reach + 1).min(rows)
+                                    {
+                                        let read = slots[&(end, row)];
+                                        let what = format!(
+                                            "{substeps} sub-steps, wind {renew}, reach {reach}, \
+                                             {rows} rows, {parts} parts: sub-step {s}, row {row}, \
+                                             pins of row {pin_row}"
+                                        );
+                                        assert!(before(slots[&(predict, pin_row)], read), "{what}");
+                                        if let Some(again) = again {
+                                            assert!(
+                                                before(read, slots[&(again, pin_row)]),
+                                                "{what}: gathered again first"
+                                            );
+                                        }
+                                    }
+                                }
+                                checked += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 300, "{checked} sub-steps' schedules checked");
     }
 
     /// The pipelined sub-step (each thread of a team on its own rows, one hand-off per sub-step) gives

@@ -192,6 +192,9 @@ pub struct Simulation {
     /// Whether a grid's position-based sub-step skips the batches of a switched-off family (always, but
     /// for a test that compares the skip with projecting them to no effect).
     pub(crate) skip_switched_off_families: bool,
+    /// How many sub-steps each pass of the last whole step's wavefront ran at most (0: the last step ran
+    /// none): for the tests to know what they compared.
+    pub(crate) wavefront_substeps_per_pass: usize,
 }
 
 /// What the rows of a grid's first pass add to each particle's body force
@@ -210,15 +213,20 @@ pub(crate) struct RowForces {
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
     /// The one-pass wavefront from `WAVEFRONT_MIN_PARTICLES` (on several threads only with at least
-    /// `WAVEFRONT_ROWS_PER_DEPTH` times its depth in rows per thread), else pass by pass.
+    /// `WAVEFRONT_ROWS_PER_DEPTH` times its depth in rows per thread), a whole step's sub-steps as many
+    /// a pass as `WAVEFRONT_WINDOW_BYTES` holds; else pass by pass.
     #[default]
     Auto,
     /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
     Passes,
     /// A pass over the cloth per batch, the batches along rows too.
     BatchByBatch,
-    /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they fit.
-    Wavefront { parts: usize },
+    /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they
+    /// fit; a whole step's sub-steps up to this many a pass.
+    Wavefront {
+        parts: usize,
+        substeps_per_pass: usize,
+    },
     /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
     /// ([`Pipeline`](crate::pipeline::Pipeline)); it must fit.
     Pipeline,
@@ -376,6 +384,7 @@ impl Simulation {
                 .and_then(|shape| GridConstraints::new(shape, &model.springs)),
             grid_sweep: GridSweep::Auto,
             skip_switched_off_families: true,
+            wavefront_substeps_per_pass: 0,
             grid_triangulation,
             grid: model.grid,
             masses: model.masses,
@@ -467,8 +476,9 @@ impl Simulation {
         // team's passes are claimed chunk by chunk instead of split in equal parts.
         let claim = self.positions.len() >= TEAM_CLAIMS_FROM_PARTICLES;
         let divergence = team.lead(team_threads, claim, || {
-            // A grid's position-based step as one pass of the team where it can go so; else (and
-            // always for the other methods) sub-step by sub-step.
+            // A grid's position-based step as one pass of the team, or as wavefronts of several
+            // sub-steps, where it can go so; else (and always for the other methods) sub-step by
+            // sub-step.
             let whole = split && self.pipelined_step(h, self.time, substeps);
             for s in (0..substeps).filter(|_| !whole) {
                 let t = self.time + s as f64 * h;

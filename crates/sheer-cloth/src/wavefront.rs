@@ -22,6 +22,10 @@
 //! least `2·depth` rows, and nothing in a part had to wait for a seam. The result is the same bits
 //! whatever the number of parts (tested against an independent check of every pair of strips below, and
 //! bit for bit in the solver's tests).
+//!
+//! Nothing here knows what a sub-step is, so the items of several sub-steps, one after another, make a
+//! schedule too: each sub-step then runs its own depth of rows behind the one before, and a row is
+//! read from memory once for all of them (`Simulation::pipelined_step`).
 
 use std::ops::Range;
 
