@@ -4,7 +4,7 @@
 //! `cargo run -p sheer-cloth --release --example fingerprint` waves the default flag, a larger grid and
 //! a long narrow one with five methods, the wind updated every sub-step and every 4, on one thread and
 //! on two; then a general triangle mesh, a grid without wind, and a grid of 262 144 particles, large
-//! enough for the one-pass wavefront on both thread counts (small-steps XPBD ×20, three frames). Each case prints a hash of the final positions and
+//! enough for the wavefronts of several sub-steps a pass on both thread counts (small-steps XPBD ×20, three frames). Each case prints a hash of the final positions and
 //! velocities (and of the frame a run diverged at, if it did), and `TOTAL` hashes them all: two builds
 //! with the same `TOTAL` gave the same bits in every case.
 //!

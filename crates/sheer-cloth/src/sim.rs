@@ -144,7 +144,7 @@ pub struct Simulation {
     /// ahead of a row's attachments the pins' positions must be known.
     pub(crate) tether_row_reach: usize,
     /// Scratch: where each pinned particle is, in `pinned_indices` order, read by the attachments; twice
-    /// over, one copy per sub-step parity (a whole step in one pass, `Simulation::pipelined_step`).
+    /// over, one copy per sub-step parity (a whole step in passes, `Simulation::pipelined_step`).
     pub(crate) tether_pin_positions: Vec<DVec3>,
     /// Where each pinned particle (in `pinned_indices` order) must be at the end of the next step.
     pub(crate) pin_targets: Vec<DVec3>,
@@ -212,9 +212,10 @@ pub(crate) struct RowForces {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
-    /// The one-pass wavefront from `WAVEFRONT_MIN_PARTICLES` (on several threads only with at least
-    /// `WAVEFRONT_ROWS_PER_DEPTH` times its depth in rows per thread), a whole step's sub-steps as many
-    /// a pass as `WAVEFRONT_WINDOW_BYTES` holds; else pass by pass.
+    /// A whole step as wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`
+    /// (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds), a sub-step as one wavefront from
+    /// `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows per thread for the seams:
+    /// `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
     #[default]
     Auto,
     /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
@@ -222,7 +223,8 @@ pub(crate) enum GridSweep {
     /// A pass over the cloth per batch, the batches along rows too.
     BatchByBatch,
     /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they
-    /// fit; a whole step's sub-steps up to this many a pass.
+    /// fit; a whole step's sub-steps up to `substeps_per_pass` a pass (fewer where they do not fit),
+    /// or with 0 each sub-step on its own.
     Wavefront {
         parts: usize,
         substeps_per_pass: usize,

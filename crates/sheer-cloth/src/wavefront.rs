@@ -25,7 +25,9 @@
 //!
 //! Nothing here knows what a sub-step is, so the items of several sub-steps, one after another, make a
 //! schedule too: each sub-step then runs its own depth of rows behind the one before, and a row is
-//! read from memory once for all of them (`Simulation::pipelined_step`).
+//! read from memory once for all of them (`Simulation::pipelined_step`). The order above covers what
+//! items touch through their rows; what they share otherwise (the attachments' buffers of the pins'
+//! positions) is checked on the schedule where it is used (`position_based.rs`).
 
 use std::ops::Range;
 
