@@ -462,6 +462,20 @@ impl Wind {
         self.per_substep && self.renewal_interval == 0.0
     }
 
+    /// Re-evaluates the aerodynamic forces at every force evaluation (the library's default):
+    /// `per_substep` with `renewal_interval` = 0.
+    pub fn renew_at_every_evaluation(&mut self) {
+        self.per_substep = true;
+        self.renewal_interval = 0.0;
+    }
+
+    /// Holds the forces of each step's start over all its sub-steps: `per_substep` off, and with it
+    /// `renewal_interval` 0, the only value allowed then (a held frame has no interval to renew at).
+    pub fn hold_for_each_step(&mut self) {
+        self.per_substep = false;
+        self.renewal_interval = 0.0;
+    }
+
     /// With a `renewal_interval` > 0 and sub-steps of `h` s: the forces are renewed every this many
     /// sub-steps, `⌊renewal_interval / h⌋`, at least 1. An interval of exactly `k·h` gives `k` (a
     /// relative 10⁻⁹ allows for its rounding).
@@ -763,6 +777,19 @@ mod wind_renewal_tests {
             ..Wind::default()
         };
         assert!((0..12).all(|s| !frame.renewal_due(s, h)));
+    }
+
+    /// The two settings without an interval, from any wind: each valid, and each what it says.
+    #[test]
+    fn holding_for_each_step_and_renewing_every_evaluation_are_valid_settings() {
+        for start in [Wind::default(), SimParams::waving_flag().wind] {
+            let mut held = start;
+            held.hold_for_each_step();
+            assert!(held.validate().is_ok() && !held.per_substep && !held.updated_every_substep());
+            let mut renewed = held;
+            renewed.renew_at_every_evaluation();
+            assert!(renewed.validate().is_ok() && renewed.updated_every_substep());
+        }
     }
 }
 

@@ -222,11 +222,7 @@ fn wind_interval_variants(scene: &Scene, method: Method) -> Vec<Variant> {
         variants.push(Variant {
             part: "wind renewal",
             setting: "once per frame".into(),
-            // Held for the frame, the forces have no interval to renew at (the library refuses one).
-            scene: with_params(scene, |p| {
-                p.wind.per_substep = false;
-                p.wind.renewal_interval = 0.0;
-            }),
+            scene: with_params(scene, |p| p.wind.hold_for_each_step()),
             method,
         });
     }
@@ -524,10 +520,7 @@ mod tests {
                 ("once per frame".to_string(), false, 0.0),
             ]
         );
-        let held = with_params(&scene, |p| {
-            p.wind.per_substep = false;
-            p.wind.renewal_interval = 0.0;
-        });
+        let held = with_params(&scene, |p| p.wind.hold_for_each_step());
         assert_eq!(settings(&held).len(), 4);
         assert!(settings(&held).iter().all(|(_, every, _)| *every));
     }

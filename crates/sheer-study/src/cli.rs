@@ -957,7 +957,7 @@ pub fn write_seeds(
     let mut scene = Scene::default_flag()?
         .with_resolution(columns, rows)?
         .with_coverage(Some(config.coverage_window));
-    scene.params.wind.renewal_interval = 0.0;
+    scene.params.wind.renew_at_every_evaluation();
     let method = Method::default();
     let seeds: Vec<u64> = (1..=count).collect();
     let rows = across_seeds(&scene, method, &seeds, &config.choice_times, monitor)?;

@@ -81,8 +81,7 @@ pub fn reference(
     // time (`Wind::renewal_interval`) or for the whole frame (`Wind::per_substep = false`), is an
     // approximation a run makes, not part of the model.
     let mut scene = scene.clone();
-    scene.params.wind.renewal_interval = 0.0;
-    scene.params.wind.per_substep = true;
+    scene.params.wind.renew_at_every_evaluation();
     let scene = &scene;
     let substeps = reference_substeps(scene, REFERENCE_SAFETY)?;
     monitor.add_work(2);

@@ -63,7 +63,7 @@ impl Scene {
             long_range_attachments: false,
             ..SimParams::waving_flag()
         };
-        params.wind.renewal_interval = 0.0;
+        params.wind.renew_at_every_evaluation();
         Scene::checked(Scene {
             name: "flag".into(),
             grid,

@@ -124,11 +124,7 @@ impl Setting {
         match self {
             Setting::FullModel | Setting::HalfTheSubsteps => {}
             Setting::WindHeld(interval) => p.wind.renewal_interval = interval,
-            Setting::WindOncePerFrame => {
-                // Held for the frame, the forces have no interval to renew at (the library refuses one).
-                p.wind.per_substep = false;
-                p.wind.renewal_interval = 0.0;
-            }
+            Setting::WindOncePerFrame => p.wind.hold_for_each_step(),
             Setting::NoDashpots => p.remove_spring_damping(),
             Setting::NoAirDamping => p.air_damping = 0.0,
             Setting::NoBending => p.bend = SpringParams::disabled(),
