@@ -926,6 +926,16 @@ impl Simulation {
         // The sub-step as one wavefront: the wind's shares (when due) and the prediction, then the batches
         // of every sweep, each sweep followed by its end. A whole step's sub-steps go a few at a time,
         // each pass of the wavefront running several sub-steps one behind the other.
+        // A whole step's passes and a lone sub-step's wavefront pay from different sizes, and need
+        // different room for their seams.
+        let (wavefront_min_particles, rows_per_depth) = if step.is_some() {
+            (
+                WHOLE_STEP_WAVEFRONT_MIN_PARTICLES,
+                WHOLE_STEP_WAVEFRONT_ROWS_PER_DEPTH,
+            )
+        } else {
+            (WAVEFRONT_MIN_PARTICLES, WAVEFRONT_ROWS_PER_DEPTH)
+        };
         let wavefront = 'plan: {
             // Decided before the plan is built, so that a small cloth's sub-step builds none.
             let (parts, forced_per_pass) = match sweep_order {
@@ -938,14 +948,7 @@ impl Simulation {
                 } => (parts, Some(substeps_per_pass)),
                 // Once the cloth outgrows the caches (and, below, with threads only when the seams,
                 // which run on one thread each, are a small share of the rows).
-                GridSweep::Auto
-                    if inverse_masses.len()
-                        < if step.is_some() {
-                            WHOLE_STEP_WAVEFRONT_MIN_PARTICLES
-                        } else {
-                            WAVEFRONT_MIN_PARTICLES
-                        } =>
-                {
+                GridSweep::Auto if inverse_masses.len() < wavefront_min_particles => {
                     break 'plan None;
                 }
                 GridSweep::Auto => (threads, None),
@@ -993,11 +996,6 @@ impl Simulation {
                         (Wavefront::new(spans_of(&items), rows), items)
                     })
                     .collect();
-                let rows_per_depth = if step.is_some() {
-                    WHOLE_STEP_WAVEFRONT_ROWS_PER_DEPTH
-                } else {
-                    WAVEFRONT_ROWS_PER_DEPTH
-                };
                 let fit = passes.iter().all(|(plan, _)| {
                     plan.fits(parts)
                         && !(sweep_order == GridSweep::Auto
@@ -1005,7 +1003,7 @@ impl Simulation {
                             && rows < rows_per_depth * threads * plan.depth())
                 });
                 if fit {
-                    break 'plan Some((passes, parts));
+                    break 'plan Some((passes, parts, per_pass));
                 }
                 if per_pass == 1 {
                     // A test's fixed order: refusing it would let the test compare pass by pass with
@@ -1022,7 +1020,7 @@ impl Simulation {
         // Whether the wavefront does the wind and the prediction itself.
         let prediction_in_wavefront = wavefront
             .as_ref()
-            .is_some_and(|(passes, _)| WaveItem::has_prediction(&passes[0].1));
+            .is_some_and(|(passes, _, _)| WaveItem::has_prediction(&passes[0].1));
         // The whole sub-step as one hand-off to a team whose threads each keep their own rows.
         let pipeline = 'plan: {
             let team = parallel.then(team_in_equal_parts).flatten();
@@ -1316,18 +1314,9 @@ impl Simulation {
                 }
             });
         }
-        if let Some((passes, parts_count)) = wavefront {
+        if let Some((passes, parts_count, per_pass)) = wavefront {
             if step.is_some() {
-                *wavefront_substeps_per_pass = passes
-                    .iter()
-                    .map(|(_, items)| {
-                        items
-                            .iter()
-                            .filter(|(item, _)| matches!(item, WaveItem::End { last: true, .. }))
-                            .count()
-                    })
-                    .max()
-                    .unwrap_or(0);
+                *wavefront_substeps_per_pass = per_pass;
             }
             for (plan, items) in &passes {
                 let run_item = |item: usize, row: usize| match items[item].0 {
