@@ -459,14 +459,10 @@ fn with_default_scene_values(text: &str) -> Result<Scene, CliError> {
         == Some(&toml::Value::Boolean(false))
         && value_at(&given, "simulation.wind.renewal_interval").is_none();
     lay_over(&mut values, given, "");
-    if per_frame {
-        let wind = values
-            .get_mut("simulation")
-            .and_then(|s| s.get_mut("wind"))
-            .and_then(|w| w.as_table_mut());
-        if let Some(wind) = wind {
-            wind.insert("renewal_interval".into(), toml::Value::Float(0.0));
-        }
+    if per_frame
+        && let Some(interval) = value_at_mut(&mut values, "simulation.wind.renewal_interval")
+    {
+        *interval = toml::Value::Float(0.0);
     }
     let mut scene: Scene = toml::Value::Table(values)
         .try_into()
@@ -483,6 +479,17 @@ fn value_at<'a>(table: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
         Some(value)
     } else {
         value_at(value.as_table()?, rest)
+    }
+}
+
+/// As [`value_at`], to be replaced.
+fn value_at_mut<'a>(table: &'a mut toml::Table, path: &str) -> Option<&'a mut toml::Value> {
+    let (head, rest) = path.split_once('.').unwrap_or((path, ""));
+    let value = table.get_mut(head)?;
+    if rest.is_empty() {
+        Some(value)
+    } else {
+        value_at_mut(value.as_table_mut()?, rest)
     }
 }
 
@@ -1034,7 +1041,7 @@ mod key_tests {
         Scene::from_toml(text, &assets()).map_err(|e| e.to_string())
     }
 
-    use super::value_at as lookup;
+    use super::{value_at as lookup, value_at_mut as lookup_mut};
 
     /// Every leaf key of a TOML table, dotted.
     fn leaf_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
@@ -1120,17 +1127,6 @@ mod key_tests {
     fn one_key(path: &str, value: &str) -> String {
         let (section, key) = path.rsplit_once('.').unwrap();
         format!("[{section}]\n{key} = {value}\n")
-    }
-
-    /// The value at a dotted `path` of a TOML table, to be replaced.
-    fn lookup_mut<'a>(table: &'a mut toml::Table, path: &str) -> Option<&'a mut toml::Value> {
-        let (head, rest) = path.split_once('.').unwrap_or((path, ""));
-        let value = table.get_mut(head)?;
-        if rest.is_empty() {
-            Some(value)
-        } else {
-            lookup_mut(value.as_table_mut()?, rest)
-        }
     }
 
     #[test]
