@@ -402,6 +402,17 @@ pub(crate) fn team_in_equal_parts() -> Option<usize> {
     (!team.claim.load(Ordering::Relaxed)).then_some(team.threads)
 }
 
+/// The number of threads of the team this thread leads, however it splits its passes: a pass over
+/// `0..threads` runs every index at once, on a thread of its own, in equal parts; claimed index by
+/// index, a thread that has finished its index claims one nobody has yet, so an index that waits for
+/// another never waits for one left unclaimed. `None` without a team.
+pub(crate) fn team_threads() -> Option<usize> {
+    let team = LEADING.get();
+    // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread.
+    let team = unsafe { team.as_ref() }?;
+    Some(team.threads)
+}
+
 /// Runs `work` on parts of `0..len` that together cover it once: on the team this thread leads (see
 /// [`Team::run`] for how it splits a pass; whatever `grain`, since a team's hand-off costs less than any
 /// pass), else on rayon's pool when `parallel` (parts of `grain` indices), else in one call. Callers must

@@ -196,7 +196,7 @@ impl Pipeline {
         timing
             .waited
             .store(waited.as_nanos() as u64, Ordering::Relaxed);
-        std::mem::forget(poison);
+        poison.disarm();
     }
 }
 
@@ -307,6 +307,19 @@ impl Progress {
         *self.poisoned.get_mut() = false;
     }
 
+    /// Zero progress for the `links` links of a chain of wavefronts
+    /// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)): one counter per link, the
+    /// cuts a pipeline learnt left as they are. Must happen before the links start.
+    pub fn reset_links(&mut self, links: usize) {
+        if self.counters.len() < links {
+            self.counters.resize_with(links, Counter::default);
+        }
+        for counter in &self.counters[..links] {
+            counter.0.store(0, Ordering::Relaxed);
+        }
+        *self.poisoned.get_mut() = false;
+    }
+
     /// How often [`rebalance`](Progress::rebalance) has moved a cut: a pipeline built before the
     /// latest move has its cuts elsewhere.
     pub fn cuts_moved(&self) -> u64 {
@@ -365,9 +378,22 @@ impl Progress {
         self.counters[q].0.load(Ordering::Acquire) >= value
     }
 
-    fn publish(&self, p: usize, value: usize) {
+    pub(crate) fn publish(&self, p: usize, value: usize) {
         // Release: what the part wrote before is seen by whoever sees the value (`wait`'s acquire).
         self.counters[p].0.store(value, Ordering::Release);
+    }
+
+    /// Waits until counter `q` has reached `value`, as [`wait`](Self::wait), and returns the value it saw
+    /// (at least `value`), so that a caller can skip the counter's cache line until it needs more.
+    pub(crate) fn wait_at_least(&self, q: usize, value: usize) -> usize {
+        self.wait(q, value);
+        self.counters[q].0.load(Ordering::Acquire)
+    }
+
+    /// A guard that poisons the progress if it is dropped, so that parts waiting for the one that holds
+    /// it panic instead of waiting for ever if that one unwinds; [`Poison::disarm`] it at the end.
+    pub(crate) fn poison_if_unwinding(&self) -> Poison<'_> {
+        Poison(self)
     }
 
     /// Waits until part `q` has reached `value`: spinning (a neighbour is normally microseconds behind),
@@ -399,8 +425,16 @@ impl Progress {
 /// several times a stage's work on the default flag.
 const SPINS_BEFORE_YIELDING: u32 = 1 << 10;
 
-/// Poisons the progress if dropped, which `run_part` prevents unless its part unwinds.
-struct Poison<'a>(&'a Progress);
+/// Poisons the progress if dropped, which `run_part` (and a chain's link) prevents unless its part
+/// unwinds.
+pub(crate) struct Poison<'a>(&'a Progress);
+
+impl Poison<'_> {
+    /// The part finished: nothing to poison.
+    pub(crate) fn disarm(self) {
+        std::mem::forget(self);
+    }
+}
 
 impl Drop for Poison<'_> {
     fn drop(&mut self) {

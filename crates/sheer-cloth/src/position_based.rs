@@ -8,7 +8,9 @@
 //! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a grid the batches
 //! along rows share a pass over the rows with the forces and the prediction before them, or with the
 //! attachments and the velocities after them; a large grid runs its whole sub-step (wind, prediction,
-//! every batch) in one pass, as a wavefront down the rows ([`Wavefront`]). In parallel, a grid's passes go to the simulation's team
+//! every batch) in one pass, as a wavefront down the rows ([`Wavefront`]), and a whole step's sub-steps
+//! several to a pass, or on a team as a chain of such passes on its threads
+//! ([`Wavefront::run_link`]). In parallel, a grid's passes go to the simulation's team
 //! of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in equal parts (a cloth
 //! below 16 384 particles), a grid's whole sub-step is one hand-off, each thread on its own rows
 //! ([`Pipeline`]).
@@ -27,7 +29,7 @@ use crate::grid_wind::{
     cells_around, predict_row_with_forces, split_cell_run, split_grid_triangle_forces,
 };
 use crate::model::Spring;
-use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts};
+use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts, team_threads};
 use crate::params::SimParams;
 use crate::params::{Method, Wind};
 use crate::pipeline::{Pipeline, Progress, Stage};
@@ -81,6 +83,17 @@ const WAVEFRONT_WINDOW_BYTES: usize = 7 << 20;
 /// and velocities (72 bytes), mass and inverse mass (16), the wind's shares of its two cells (48), six
 /// constraints' rest lengths and inverted divisors (96), its attachment (12).
 const SUBSTEP_BYTES_PER_PARTICLE: usize = 244;
+
+/// The sub-steps of each link of a chain of `substeps` sub-steps on `threads` threads, links of at
+/// most `most`: as few rounds of one link per thread as that allows, the sub-steps spread evenly over
+/// the links (the longer ones first), so that every thread runs about as many sub-steps.
+fn link_sizes(substeps: usize, most: usize, threads: usize) -> Vec<usize> {
+    let rounds = substeps.div_ceil(threads * most.max(1));
+    let links = (rounds * threads).min(substeps).max(1);
+    (0..links)
+        .map(|link| substeps / links + usize::from(link < substeps % links))
+        .collect()
+}
 
 /// How many of a step's `substeps` sub-steps one pass of the wavefront runs on a grid of `columns`
 /// columns, when a sub-step keeps `substep_depth` rows in flight: as many as fit
@@ -510,7 +523,11 @@ impl Simulation {
     /// A large grid's whole step goes as wavefronts instead ([`Wavefront`]), each pass running as many
     /// sub-steps one behind the other as keep the rows in flight within [`WAVEFRONT_WINDOW_BYTES`]:
     /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
-    /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass").
+    /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass"). On a team of
+    /// threads the passes go either in parts (the rows cut between the threads, the seams around the
+    /// cuts after them) or as a chain, one pass (*link*) per thread at a time, each following the one
+    /// before down the rows ([`Wavefront::run_link`]): the chain where its links hold more sub-steps
+    /// than the parts' passes could, the seams needing rows (crate README, "A chain of wavefronts").
     pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
         let (iterations, pbd_stiffness) = match self.params.method {
             Method::Pbd {
@@ -536,6 +553,7 @@ impl Simulation {
             GridSweep::Wavefront {
                 substeps_per_pass, ..
             } => substeps_per_pass > 0,
+            GridSweep::Chain { .. } => true,
             GridSweep::Auto => !small,
             _ => false,
         };
@@ -544,6 +562,7 @@ impl Simulation {
             && (pipeline || wavefront)
             && !(self.wind_acts() && self.grid_triangulation.is_none());
         self.wavefront_substeps_per_pass = 0;
+        self.wavefront_chained = false;
         if !eligible {
             return false;
         }
@@ -874,6 +893,7 @@ impl Simulation {
             progress,
             pipeline_plan,
             wavefront_substeps_per_pass,
+            wavefront_chained,
             ..
         } = self
         else {
@@ -936,22 +956,29 @@ impl Simulation {
         } else {
             (WAVEFRONT_MIN_PARTICLES, WAVEFRONT_ROWS_PER_DEPTH)
         };
+        // A whole step on a team in equal parts goes as a chain of wavefronts on its threads.
+        // A whole step on a team of threads can go as a chain of wavefronts instead (`Wavefront::run_link`).
+        let chain_team = step
+            .and(team_threads())
+            .filter(|&team| parallel && team > 1);
         let wavefront = 'plan: {
             // Decided before the plan is built, so that a small cloth's sub-step builds none.
-            let (parts, forced_per_pass) = match sweep_order {
+            let (parts, forced_per_pass, forced_chain) = match sweep_order {
                 GridSweep::Passes | GridSweep::BatchByBatch | GridSweep::Pipeline => {
                     break 'plan None;
                 }
                 GridSweep::Wavefront {
                     parts,
                     substeps_per_pass,
-                } => (parts, Some(substeps_per_pass)),
-                // Once the cloth outgrows the caches (and, below, with threads only when the seams,
-                // which run on one thread each, are a small share of the rows).
+                } => (parts, Some(substeps_per_pass), false),
+                GridSweep::Chain { .. } if step.is_none() => break 'plan None,
+                GridSweep::Chain { substeps_per_link } => (1, Some(substeps_per_link), true),
+                // Once the cloth outgrows the caches (and, below, in parts only when the seams, which
+                // run on one thread each, are a small share of the rows).
                 GridSweep::Auto if inverse_masses.len() < wavefront_min_particles => {
                     break 'plan None;
                 }
-                GridSweep::Auto => (threads, None),
+                GridSweep::Auto => (threads, None, false),
             };
             let reach = if params.long_range_attachments {
                 *tether_row_reach
@@ -980,7 +1007,7 @@ impl Simulation {
             if step.is_some() && !WaveItem::has_prediction(&one) {
                 break 'plan None;
             }
-            let mut per_pass = match forced_per_pass {
+            let most = match forced_per_pass {
                 Some(per_pass) => per_pass.clamp(1, substep_count),
                 None => substeps_in_flight(
                     columns,
@@ -988,39 +1015,66 @@ impl Simulation {
                     substep_count,
                 ),
             };
-            loop {
-                let passes: Vec<(Wavefront, Vec<(WaveItem, usize)>)> = (0..substep_count)
-                    .step_by(per_pass)
-                    .map(|first| {
-                        let items = items_of(first..(first + per_pass).min(substep_count));
+            // Passes (or links) of `sizes` sub-steps each.
+            let passes_of = |sizes: &[usize]| -> Vec<(Wavefront, Vec<(WaveItem, usize)>)> {
+                let mut first = 0;
+                sizes
+                    .iter()
+                    .map(|&size| {
+                        let items = items_of(first..first + size);
+                        first += size;
                         (Wavefront::new(spans_of(&items), rows), items)
                     })
-                    .collect();
+                    .collect()
+            };
+            // `per_pass` sub-steps a pass, the last pass fewer.
+            let even = |per_pass: usize| -> Vec<usize> {
+                (0..substep_count)
+                    .step_by(per_pass)
+                    .map(|first| per_pass.min(substep_count - first))
+                    .collect()
+            };
+            if forced_chain {
+                let team = chain_team.expect("the chain needs a team of threads");
+                break 'plan Some((passes_of(&even(most)), 1, most, Some(team)));
+            }
+            // In parts: as many sub-steps a pass as fit the parts, at most `most`.
+            let in_parts = (1..=most).rev().find_map(|per_pass| {
+                let passes = passes_of(&even(per_pass));
                 let fit = passes.iter().all(|(plan, _)| {
                     plan.fits(parts)
                         && !(sweep_order == GridSweep::Auto
                             && threads > 1
                             && rows < rows_per_depth * threads * plan.depth())
                 });
-                if fit {
-                    break 'plan Some((passes, parts, per_pass));
+                fit.then_some((passes, parts, per_pass, None))
+            });
+            // On a team, a chain where each of its links holds more sub-steps than a pass in parts
+            // would: both stream a row from memory once a pass (or link), but a chain has no seams to
+            // make room for (crate README, "A chain of wavefronts").
+            if let (GridSweep::Auto, Some(team)) = (sweep_order, chain_team) {
+                let sizes = link_sizes(substep_count, most, team);
+                let shortest = sizes.iter().copied().min().unwrap_or(1);
+                if in_parts
+                    .as_ref()
+                    .is_none_or(|(_, _, per_pass, _)| shortest > *per_pass)
+                {
+                    let longest = sizes.iter().copied().max().unwrap_or(1);
+                    break 'plan Some((passes_of(&sizes), 1, longest, Some(team)));
                 }
-                if per_pass == 1 {
-                    // A test's fixed order: refusing it would let the test compare pass by pass with
-                    // itself (a whole step that does not fit goes sub-step by sub-step, and is checked
-                    // there).
-                    if let (GridSweep::Wavefront { parts, .. }, None) = (sweep_order, step) {
-                        panic!("{parts} parts do not fit {rows} rows");
-                    }
-                    break 'plan None;
-                }
-                per_pass -= 1;
             }
+            // A test's fixed order: refusing it would let the test compare pass by pass with itself (a
+            // whole step that does not fit goes sub-step by sub-step, and is checked there).
+            if let (None, GridSweep::Wavefront { parts, .. }, None) = (&in_parts, sweep_order, step)
+            {
+                panic!("{parts} parts do not fit {rows} rows");
+            }
+            in_parts
         };
         // Whether the wavefront does the wind and the prediction itself.
         let prediction_in_wavefront = wavefront
             .as_ref()
-            .is_some_and(|(passes, _, _)| WaveItem::has_prediction(&passes[0].1));
+            .is_some_and(|(passes, ..)| WaveItem::has_prediction(&passes[0].1));
         // The whole sub-step as one hand-off to a team whose threads each keep their own rows.
         let pipeline = 'plan: {
             let team = parallel.then(team_in_equal_parts).flatten();
@@ -1093,7 +1147,9 @@ impl Simulation {
         // finished the next sub-step's prediction: `Stage::after_all`; in a wavefront of several
         // sub-steps the sub-step after next runs a whole sub-step's depth of rows, at least the
         // attachments' reach, behind: checked on the schedule,
-        // `in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again`).
+        // `in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again`, and
+        // for a chain, whose links wait for the link before,
+        // `in_a_chain_each_pins_buffer_is_read_before_it_is_gathered_again`).
         let (first_buffer, second_buffer) = tether_pin_positions.split_at_mut(pinned_indices.len());
         let tethers = [first_buffer, second_buffer].map(|buffer| {
             Tethers::of_substep(
@@ -1108,9 +1164,10 @@ impl Simulation {
         let tethers_of = |substep: usize| tethers[substep % 2].as_ref();
         // SAFETY (callers): the strips of a batch touch disjoint particle ranges (checked by the
         // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
-        // touch no row at once that another part touches (`Pipeline`), and the wavefront's concurrent
-        // parts and seams touch disjoint rows (`Wavefront::fits`); each strip owns its constraints'
-        // multipliers.
+        // touch no row at once that another part touches (`Pipeline`), the wavefront's concurrent
+        // parts and seams touch disjoint rows (`Wavefront::fits`), and a chain's links touch a row
+        // only after the earlier links are done with it (`Wavefront::run_link`); each strip owns its
+        // constraints' multipliers.
         let project_these = |strips: &[Strip]| {
             // A batch holds one family.
             if strips.iter().all(|s| !active[family_index(s.kind)]) {
@@ -1202,8 +1259,9 @@ impl Simulation {
                 // SAFETY: no attachment reads the row's pins meanwhile, in this buffer: a pass runs
                 // none, the pipeline's stage runs them only after every part has finished it
                 // (`Stage::after_all`), and the wavefront keeps them behind this item by the tethers'
-                // reach (`WaveItem::of_substep`) and, in a pass of several sub-steps, those of the
-                // sub-step two before (the same buffer) ahead of it (see `tethers` above).
+                // reach (`WaveItem::of_substep`) and, in a pass of several sub-steps or a chain of
+                // them, those of the sub-step two before (the same buffer) ahead of it (see `tethers`
+                // above).
                 unsafe { tethers.gather(particles_of(row), &positions) };
             }
         };
@@ -1314,12 +1372,13 @@ impl Simulation {
                 }
             });
         }
-        if let Some((passes, parts_count, per_pass)) = wavefront {
+        if let Some((passes, parts_count, per_pass, chain)) = wavefront {
             if step.is_some() {
                 *wavefront_substeps_per_pass = per_pass;
+                *wavefront_chained = chain.is_some();
             }
-            for (plan, items) in &passes {
-                let run_item = |item: usize, row: usize| match items[item].0 {
+            let run_item =
+                |items: &[(WaveItem, usize)], item: usize, row: usize| match items[item].0 {
                     // Last row `row` of the cell row above it (none above the first row).
                     WaveItem::Wind { substep } => {
                         if row > 0 {
@@ -1335,6 +1394,27 @@ impl Simulation {
                         }
                     }
                 };
+            if let Some(team) = chain {
+                // Link `k` on thread `k mod team`, each thread's links in order: one index per thread
+                // of the team, which, also when its threads claim indices one by one, leaves none
+                // unclaimed while the others wait (`team_threads`).
+                progress.reset_links(passes.len());
+                let progress = &*progress;
+                parts(team, parallel, 1, |threads| {
+                    threads.for_each(|thread| {
+                        for link in (thread..passes.len()).step_by(team) {
+                            let (plan, items) = &passes[link];
+                            let previous = link.checked_sub(1).map(|before| &passes[before].0);
+                            plan.run_link(link, previous, progress, |item, row| {
+                                run_item(items, item, row)
+                            });
+                        }
+                    })
+                });
+                return true;
+            }
+            for (plan, items) in &passes {
+                let run_item = |item: usize, row: usize| run_item(items, item, row);
                 // Each part's own strips need nothing across a cut, so the parts run at once; the seams
                 // around the cuts need both neighbours' parts done, and touch disjoint rows of their
                 // own. Both passes have one index per part, so that each thread of the team takes one
@@ -2093,36 +2173,128 @@ mod tests {
         assert!(fewer > 0, "some pass was cut down to fit its parts");
     }
 
+    /// A whole step as a chain of wavefronts on a team (links of 1, 2, 3 and all sub-steps, on two,
+    /// three and four threads) gives the bits of pass by pass: small-steps XPBD and PBD, with the wind
+    /// renewed every sub-step, held for three and off, a turning and swaying pole; XPBD with multipliers
+    /// steps sub-step by sub-step.
+    #[test]
+    fn a_whole_step_as_a_chain_of_wavefronts_gives_the_bits_of_pass_by_pass() {
+        use crate::sim::GridSweep;
+        let methods = [
+            Method::SmallStepsXpbd { substeps: 20 },
+            Method::Pbd {
+                substeps: 3,
+                iterations: 2,
+                stiffness: 1.0,
+            },
+            Method::Xpbd {
+                substeps: 2,
+                iterations: 2,
+            },
+        ];
+        let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
+        for method in methods {
+            let whole_steps = !matches!(method, Method::Xpbd { .. });
+            for (speed, interval) in winds {
+                let run = |sweep: GridSweep, threads: usize| {
+                    let mut sim = windy_flag(9, 61, 1.5, method, threads > 1);
+                    sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
+                    sim.params.wind.renewal_interval = held_for(interval, method);
+                    sim.grid_sweep = sweep;
+                    turning_pole(&mut sim, threads, 6);
+                    let run = (sim.wavefront_substeps_per_pass, sim.wavefront_chained);
+                    (state_bits(&sim), run)
+                };
+                let (passes, _) = run(GridSweep::Passes, 1);
+                for threads in [2, 3, 4] {
+                    for substeps_per_link in [1, 2, 3, 20] {
+                        let sweep = GridSweep::Chain { substeps_per_link };
+                        let (bits, (per_link, chained)) = run(sweep, threads);
+                        let what = format!(
+                            "{method:?}, wind {speed} m/s every {interval}: links of \
+                             {substeps_per_link} sub-steps on {threads} threads"
+                        );
+                        assert_eq!(passes, bits, "{what}");
+                        if whole_steps {
+                            let most = substeps_per_link.min(method.substeps() as usize);
+                            assert_eq!((per_link, chained), (most, true), "{what}");
+                        } else {
+                            assert_eq!((per_link, chained), (0, false), "{what}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A chain's links spread a step's sub-steps evenly over the threads, in as few rounds as links of
+    /// at most `most` allow.
+    #[test]
+    fn a_chain_gives_every_thread_about_as_many_sub_steps() {
+        for substeps in 1..=40 {
+            for most in 1..=8 {
+                for threads in 2..=4 {
+                    let sizes = super::link_sizes(substeps, most, threads);
+                    let what = format!("{substeps} sub-steps, links of at most {most}: {sizes:?}");
+                    assert_eq!(sizes.iter().sum::<usize>(), substeps, "{what}");
+                    assert!(sizes.iter().all(|&s| (1..=most).contains(&s)), "{what}");
+                    // As few links as links of at most `most` allow, in whole rounds where there are
+                    // enough sub-steps.
+                    let rounds = substeps.div_ceil(threads * most);
+                    assert_eq!(sizes.len(), (rounds * threads).min(substeps), "{what}");
+                    let per_thread: Vec<usize> = (0..threads)
+                        .map(|t| sizes.iter().skip(t).step_by(threads).sum())
+                        .collect();
+                    let (fewest, most_work) = (
+                        per_thread.iter().min().unwrap(),
+                        per_thread.iter().max().unwrap(),
+                    );
+                    assert!(most_work - fewest <= rounds, "{what}: {per_thread:?}");
+                }
+            }
+        }
+        assert_eq!(super::link_sizes(20, 4, 2), [4, 4, 3, 3, 3, 3]);
+        assert_eq!(super::link_sizes(20, 6, 2), [5, 5, 5, 5]);
+    }
+
     /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a pass
-    /// (as many as `WAVEFRONT_WINDOW_BYTES` holds on one thread, fewer on two where the seams need the
-    /// rows) and gives the bits of pass by pass, with the wind held for two sub-steps.
+    /// (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with the wind held
+    /// for two sub-steps. On one thread in one part; on a team of two as a chain where its links hold
+    /// more sub-steps than the passes in parts would (384 columns: links of five against passes of
+    /// two or three), else in parts (1 400 columns: one sub-step a pass either way).
     #[test]
     fn left_to_choose_a_large_grid_takes_several_sub_steps_a_pass_with_the_same_bits() {
         use crate::sim::GridSweep;
         let method = Method::SmallStepsXpbd { substeps: 20 };
-        let (columns, rows) = (384, 288);
-        assert!(columns * rows >= super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES);
-        let run = |sweep: GridSweep, threads: usize| {
-            let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
-            sim.params.wind.renewal_interval = held_for(2, method);
-            sim.grid_sweep = sweep;
-            turning_pole(&mut sim, threads, 2);
-            (state_bits(&sim), sim.wavefront_substeps_per_pass)
-        };
-        let (passes, _) = run(GridSweep::Passes, 1);
-        // A sub-step keeps 12 rows in flight (the wind, the prediction and a sweep's 10).
-        let most = super::substeps_in_flight(columns, 12, 20);
-        assert!(most >= 4, "{most} sub-steps a pass");
-        for threads in [1, 2] {
-            let (bits, per_pass) = run(GridSweep::Auto, threads);
-            assert!(
-                bits == passes,
-                "{threads} threads: not the bits of pass by pass"
-            );
-            if threads == 1 {
-                assert_eq!(per_pass, most);
-            } else {
-                assert!((2..most).contains(&per_pass), "{per_pass} sub-steps a pass");
+        for (columns, rows, chained) in [(384, 288, true), (1400, 144, false)] {
+            assert!(columns * rows >= super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES);
+            let run = |sweep: GridSweep, threads: usize| {
+                let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
+                sim.params.wind.renewal_interval = held_for(2, method);
+                sim.grid_sweep = sweep;
+                turning_pole(&mut sim, threads, 2);
+                let run = (sim.wavefront_substeps_per_pass, sim.wavefront_chained);
+                (state_bits(&sim), run)
+            };
+            let (passes, _) = run(GridSweep::Passes, 1);
+            // A sub-step keeps 12 rows in flight (the wind, the prediction and a sweep's 10).
+            let most = super::substeps_in_flight(columns, 12, 20);
+            let what = format!("{columns} × {rows}");
+            assert_eq!(most >= 4, chained, "{what}: {most} sub-steps a pass");
+            for threads in [1, 2] {
+                let (bits, (per_pass, in_chain)) = run(GridSweep::Auto, threads);
+                assert!(
+                    bits == passes,
+                    "{what}, {threads} threads: not the bits of pass by pass"
+                );
+                if threads == 1 {
+                    assert_eq!((per_pass, in_chain), (most, false), "{what}");
+                } else if chained {
+                    let longest = super::link_sizes(20, most, 2).into_iter().max();
+                    assert_eq!((Some(per_pass), in_chain), (longest, true), "{what}");
+                } else {
+                    assert_eq!((per_pass, in_chain), (1, false), "{what}");
+                }
             }
         }
     }
@@ -2199,6 +2371,115 @@ mod tests {
             checked > 300 && on_parts > 100,
             "{checked} schedules checked, {on_parts} in parts"
         );
+        assert!(
+            one_buffer_broken,
+            "one buffer would do: the check cannot fail"
+        );
+    }
+
+    /// In a chain of wavefronts the attachments of a sub-step read its prediction's buffer of the pins'
+    /// positions surely after the predictions within the reach of its sub-step and surely before those
+    /// of the sub-step after next, which may run in another link on another thread: links of one to
+    /// three sub-steps of one sweep and of two, the wind renewed in every sub-step, in none and in every
+    /// other, every reach that lets the prediction into the wavefront, on two to four threads. The same
+    /// check with one buffer fails.
+    #[test]
+    fn in_a_chain_each_pins_buffer_is_read_before_it_is_gathered_again() {
+        use super::WaveItem;
+        use crate::wavefront::Wavefront;
+        use crate::wavefront::tests::chain_before;
+        let sim = windy_flag(9, 20, 3.0, Method::default(), false);
+        let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
+        let (mut checked, mut one_buffer_broken) = (0, false);
+        for sizes in [
+            vec![1, 1, 1, 1],
+            vec![2, 2],
+            vec![1, 2, 1],
+            vec![3, 1],
+            vec![2, 1, 2],
+        ] {
+            for sweeps in [1, 2] {
+                for renewing in [|_| true, |_| false, |s: usize| s.is_multiple_of(2)] {
+                    for reach in 0..=10 {
+                        // Each link's items, and where each sub-step's prediction and ends are.
+                        let mut first = 0;
+                        let links_items: Vec<Vec<(WaveItem, usize)>> = sizes
+                            .iter()
+                            .map(|&size| {
+                                first += size;
+                                (first - size..first)
+                                    .flat_map(|s| {
+                                        WaveItem::of_substep(
+                                            s,
+                                            renewing(s),
+                                            by_last_row,
+                                            sweeps,
+                                            reach,
+                                        )
+                                    })
+                                    .collect()
+                            })
+                            .collect();
+                        let find = |wanted: WaveItem| {
+                            links_items.iter().enumerate().find_map(|(link, items)| {
+                                let i = items.iter().position(|(item, _)| *item == wanted)?;
+                                Some((link, i))
+                            })
+                        };
+                        for rows in [5, 31, 90] {
+                            let links: Vec<Wavefront> = links_items
+                                .iter()
+                                .map(|items| {
+                                    Wavefront::new(items.iter().map(|(_, s)| *s).collect(), rows)
+                                })
+                                .collect();
+                            for threads in 2..=4 {
+                                let before = chain_before(&links, threads);
+                                let ordered = |reuse: usize| {
+                                    let ends =
+                                        links_items.iter().enumerate().flat_map(|(l, items)| {
+                                            items
+                                                .iter()
+                                                .enumerate()
+                                                .map(move |(i, it)| (l, i, it.0))
+                                        });
+                                    ends.filter_map(|(l, i, item)| match item {
+                                        WaveItem::End { substep, .. } => Some((l, i, substep)),
+                                        _ => None,
+                                    })
+                                    .all(|(l, i, substep)| {
+                                        let predict = find(WaveItem::Predict { substep })
+                                            .expect("the prediction is in the wavefront");
+                                        let again = find(WaveItem::Predict {
+                                            substep: substep + reuse,
+                                        });
+                                        (0..rows).all(|row| {
+                                            let read = (l, i, row);
+                                            let pins = row.saturating_sub(reach)
+                                                ..(row + reach + 1).min(rows);
+                                            pins.clone().all(|pin_row| {
+                                                before((predict.0, predict.1, pin_row), read)
+                                                    && again.is_none_or(|(la, ia)| {
+                                                        before(read, (la, ia, pin_row))
+                                                    })
+                                            })
+                                        })
+                                    })
+                                };
+                                assert!(
+                                    ordered(2),
+                                    "links {sizes:?} of {sweeps} sweeps, reach {reach}, {rows} \
+                                     rows, {threads} threads"
+                                );
+                                one_buffer_broken |= !ordered(1);
+                                checked += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} chains checked");
         assert!(
             one_buffer_broken,
             "one buffer would do: the check cannot fail"

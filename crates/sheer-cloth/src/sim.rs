@@ -195,6 +195,8 @@ pub struct Simulation {
     /// How many sub-steps each pass of the last whole step's wavefront ran at most (0: the last step ran
     /// none): for the tests to know what they compared.
     pub(crate) wavefront_substeps_per_pass: usize,
+    /// Whether those wavefronts ran as a chain on the team's threads (`Wavefront::run_link`).
+    pub(crate) wavefront_chained: bool,
 }
 
 /// What the rows of a grid's first pass add to each particle's body force
@@ -213,7 +215,8 @@ pub(crate) struct RowForces {
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
     /// A whole step as wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`
-    /// (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds), a sub-step as one wavefront from
+    /// (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, as a chain of them where its links
+    /// hold more sub-steps than passes in parts would), a sub-step as one wavefront from
     /// `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows per thread for the seams:
     /// `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
     #[default]
@@ -232,6 +235,11 @@ pub(crate) enum GridSweep {
     /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
     /// ([`Pipeline`](crate::pipeline::Pipeline)); it must fit.
     Pipeline,
+    /// On a team in equal parts (it must have one), a whole step as a chain of wavefronts
+    /// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)), links of `substeps_per_link`
+    /// sub-steps (the last may have fewer), link `k` on thread `k mod threads`; sub-step by sub-step
+    /// pass by pass where a whole step cannot go in wavefronts.
+    Chain { substeps_per_link: usize },
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -387,6 +395,7 @@ impl Simulation {
             grid_sweep: GridSweep::Auto,
             skip_switched_off_families: true,
             wavefront_substeps_per_pass: 0,
+            wavefront_chained: false,
             grid_triangulation,
             grid: model.grid,
             masses: model.masses,

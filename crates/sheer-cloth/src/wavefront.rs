@@ -28,8 +28,25 @@
 //! read from memory once for all of them (`Simulation::pipelined_step`). The order above covers what
 //! items touch through their rows; what they share otherwise (the attachments' buffers of the pins'
 //! positions) is checked on the schedule where it is used (`position_based.rs`).
+//!
+//! A *chain* runs such sequences on threads instead of cutting the rows: a whole step's sub-steps are
+//! cut into *links* of a few sub-steps each, link `k` going to thread `k mod threads`, each link a
+//! wavefront of one part over all the rows, run as if its items followed link `k − 1`'s in one
+//! wavefront. Link `k`'s items lag link `k − 1`'s first by `D = ` that link's depth, so link `k`'s step
+//! `t` is the joint step `t + D` of link `k − 1`; before it, link `k` waits until link `k − 1` has
+//! finished its steps through `t + D` ([`Wavefront::run_link`]). Two strips that share a row, of an
+//! earlier link's item and a later one's, run at joint steps in that order (the inequality above, on
+//! the joint lags), so the earlier one has finished first: by the wait for neighbouring links, by the
+//! waits of the links between them (each finished its steps through the later strip's joint step only
+//! after the link before it had), or, on the same thread, because links run there in order. No seams
+//! run on one thread while the others wait, so a link can hold as many sub-steps as one thread's
+//! cache allows however few rows each thread would get; but the thread after reads each row from the
+//! other core a link's depth of rows later, which on the build machine cost as much as reading it
+//! from memory (crate README, "A chain of wavefronts").
 
 use std::ops::Range;
+
+use crate::pipeline::Progress;
 
 /// The schedule of a sequence of items over the rows of a grid.
 #[derive(Clone, Debug)]
@@ -62,6 +79,51 @@ impl Wavefront {
             (Some(lag), Some(span)) => lag + span,
             _ => 0,
         }
+    }
+
+    /// Steps of a wavefront of one part: the last item's last row runs at step `rows − 1 + lag`.
+    pub fn steps(&self) -> usize {
+        self.rows + self.lags.last().copied().unwrap_or(0)
+    }
+
+    /// Runs `work(item, last_row)` for every strip on this thread, in wavefront order, as link `link`
+    /// of a chain (see the module documentation): before each step `t` it waits until link `link − 1`,
+    /// whose schedule is `previous`, has finished its steps through `t + previous.depth()`, and after
+    /// it says so in `progress`'s counter `link` (reset for the chain's links beforehand,
+    /// [`Progress::reset_links`]). Every link must run on a thread of its own or after the links before
+    /// it on the same thread; if a link panics, the links waiting for it panic too.
+    pub fn run_link(
+        &self,
+        link: usize,
+        previous: Option<&Wavefront>,
+        progress: &Progress,
+        mut work: impl FnMut(usize, usize),
+    ) {
+        debug_assert!(link > 0 || previous.is_none());
+        let poison = progress.poison_if_unwinding();
+        // The steps link `link − 1` was last seen to have finished.
+        let mut seen = 0;
+        for t in 0..self.steps() {
+            if let Some(previous) = previous {
+                let needed = previous.finished_before(t);
+                if seen < needed {
+                    seen = progress.wait_at_least(link - 1, needed);
+                }
+            }
+            for (i, &lag) in self.lags.iter().enumerate() {
+                if let Some(row) = t.checked_sub(lag).filter(|&row| row < self.rows) {
+                    work(i, row);
+                }
+            }
+            progress.publish(link, t + 1);
+        }
+        poison.disarm();
+    }
+
+    /// How many of its steps this wavefront, a chain's link, must have finished before the next link
+    /// starts its step `t`: those through the joint step `t + depth` (see the module documentation).
+    fn finished_before(&self, t: usize) -> usize {
+        (t + self.depth() + 1).min(self.steps())
     }
 
     /// Whether `parts` parts leave every part at least `2·depth` rows (and at least one), so that the
@@ -224,6 +286,220 @@ pub(crate) mod tests {
             }
         }
         assert!(parallel_cases > 10, "the parallel schedules are exercised");
+    }
+
+    /// For a chain of `links` on `threads` threads (link `k` on thread `k mod threads`), a function of
+    /// `(link, step)` giving, per earlier link, how many of its steps have surely finished when that
+    /// link starts that step, by the waits of [`Wavefront::run_link`] and the order of each thread's
+    /// links: the link before has finished [`Wavefront::finished_before`] of its steps; a link that has
+    /// started a step started after the links before it on its thread and after its own wait there.
+    pub(crate) fn chain_finished(
+        links: &[Wavefront],
+        threads: usize,
+    ) -> impl Fn(usize, usize) -> Vec<usize> + '_ {
+        move |link, step| {
+            let mut finished = vec![0; link];
+            if let Some(before) = link.checked_sub(1) {
+                finished[before] = links[before].finished_before(step);
+            }
+            for k in (0..link).filter(|k| k % threads == link % threads) {
+                finished[k] = links[k].steps();
+            }
+            for j in (0..link).rev() {
+                if finished[j] == 0 {
+                    continue;
+                }
+                // Link `j` started its step `finished[j] − 1`.
+                if let Some(before) = j.checked_sub(1) {
+                    let needed = links[before].finished_before(finished[j] - 1);
+                    finished[before] = finished[before].max(needed);
+                }
+                for k in (0..j).filter(|k| k % threads == j % threads) {
+                    finished[k] = links[k].steps();
+                }
+            }
+            finished
+        }
+    }
+
+    /// For a chain of `links` on `threads` threads: whether strip `a` surely runs before strip `b`, each
+    /// given as (link, item of the link, last row): earlier in the same link's sweep, or in an earlier
+    /// link at a step that link has surely finished when `b`'s link starts `b`'s step.
+    pub(crate) fn chain_before(
+        links: &[Wavefront],
+        threads: usize,
+    ) -> impl Fn((usize, usize, usize), (usize, usize, usize)) -> bool + '_ {
+        let finished = chain_finished(links, threads);
+        move |(la, ia, ra), (lb, ib, rb)| {
+            let (ta, tb) = (ra + links[la].lags[ia], rb + links[lb].lags[ib]);
+            if la == lb {
+                (ta, ia) < (tb, ib)
+            } else {
+                la < lb && ta < finished(lb, tb)[la]
+            }
+        }
+    }
+
+    /// The items of `spans` cut into links of the given numbers of items, and per item of the whole its
+    /// link and its index in the link.
+    fn links_of(
+        spans: &[usize],
+        sizes: &[usize],
+        rows: usize,
+    ) -> (Vec<Wavefront>, Vec<(usize, usize)>) {
+        let mut first = 0;
+        let mut place = Vec::new();
+        let links = sizes
+            .iter()
+            .enumerate()
+            .map(|(link, &size)| {
+                place.extend((0..size).map(|i| (link, i)));
+                first += size;
+                Wavefront::new(spans[first - size..first].to_vec(), rows)
+            })
+            .collect();
+        (links, place)
+    }
+
+    /// Every pair of strips that share a row, the later in the joint order of `spans` (item `j > i`),
+    /// as `(i, row_i, j, row_j)`.
+    fn sharing_pairs(spans: &[usize], rows: usize) -> Vec<(usize, usize, usize, usize)> {
+        let mut pairs = Vec::new();
+        for (i, &span_i) in spans.iter().enumerate() {
+            for ri in span_i..rows {
+                for (j, &span_j) in spans.iter().enumerate().skip(i + 1) {
+                    for rj in (ri - span_i).max(span_j)..(ri + span_j + 1).min(rows) {
+                        pairs.push((i, ri, j, rj));
+                    }
+                }
+            }
+        }
+        pairs
+    }
+
+    /// Items of a sub-step's wavefront as the solver makes them: the wind, the prediction, a sweep's
+    /// batches and its end; `substeps` of them one after another.
+    fn substep_spans(substeps: usize) -> Vec<usize> {
+        [1, 0, 0, 0, 2, 2, 1, 1, 1, 1, 1, 1, 0, 0, 0].repeat(substeps)
+    }
+
+    /// In a chain, every pair of strips that share a row runs in the joint order, by the waits alone
+    /// (checked on the guarantees of [`chain_finished`], without timing): links of one to five
+    /// sub-steps, even and uneven, on two to four threads, on short and tall grids; a wait one step
+    /// shorter breaks it.
+    #[test]
+    fn in_a_chain_every_pair_of_strips_sharing_a_row_runs_in_the_joint_order() {
+        let per_substep = substep_spans(1).len();
+        let mut shorter_broken = false;
+        for sizes in [
+            vec![1; 6],
+            vec![2, 2, 2],
+            vec![3, 3],
+            vec![5, 1],
+            vec![1, 2, 3],
+        ] {
+            let spans = substep_spans(sizes.iter().sum());
+            let sizes: Vec<usize> = sizes.iter().map(|s| s * per_substep).collect();
+            for rows in [5, 31, 90] {
+                let (links, place) = links_of(&spans, &sizes, rows);
+                let step_of = |item: usize, row: usize| {
+                    let (link, i) = place[item];
+                    (link, row + links[link].lags[i], i)
+                };
+                for threads in 2..=4 {
+                    let finished = chain_finished(&links, threads);
+                    let pairs = sharing_pairs(&spans, rows);
+                    let ordered = |slack: usize| {
+                        pairs.iter().all(|&(i, ri, j, rj)| {
+                            let (a, b) = (step_of(i, ri), step_of(j, rj));
+                            if a.0 == b.0 {
+                                (a.1, a.2) < (b.1, b.2)
+                            } else {
+                                a.1 + slack < finished(b.0, b.1)[a.0]
+                            }
+                        })
+                    };
+                    assert!(
+                        ordered(0),
+                        "links {sizes:?} over {rows} rows on {threads} threads"
+                    );
+                    shorter_broken |= !ordered(1);
+                }
+            }
+        }
+        assert!(
+            shorter_broken,
+            "a wait one step shorter would do: the check cannot fail"
+        );
+    }
+
+    /// A chain run on real threads, each link waiting as [`Wavefront::run_link`] does, runs every strip
+    /// once and every pair that shares a row in the joint order: links of one, two and three
+    /// sub-steps on two and three threads, with a slow leading link and with a slow following one.
+    #[test]
+    fn a_chain_on_threads_runs_every_pair_sharing_a_row_in_the_joint_order() {
+        use std::sync::Mutex;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let per_substep = substep_spans(1).len();
+        let rows = 40;
+        for sizes in [vec![1; 4], vec![2, 1, 2], vec![3, 3]] {
+            let spans = substep_spans(sizes.iter().sum());
+            let sizes: Vec<usize> = sizes.iter().map(|s| s * per_substep).collect();
+            let (links, place) = links_of(&spans, &sizes, rows);
+            for threads in [2, 3] {
+                for slow_link in [0, 1] {
+                    let mut progress = Progress::default();
+                    progress.reset_links(links.len());
+                    let clock = AtomicUsize::new(0);
+                    let log: Vec<Mutex<Vec<usize>>> = (0..spans.len() * rows)
+                        .map(|_| Mutex::new(Vec::new()))
+                        .collect();
+                    let offsets: Vec<usize> = sizes
+                        .iter()
+                        .scan(0, |first, size| {
+                            *first += size;
+                            Some(*first - size)
+                        })
+                        .collect();
+                    std::thread::scope(|scope| {
+                        for thread in 0..threads {
+                            let (links, progress, clock, log, offsets) =
+                                (&links, &progress, &clock, &log, &offsets);
+                            scope.spawn(move || {
+                                for link in (thread..links.len()).step_by(threads) {
+                                    let previous = link.checked_sub(1).map(|k| &links[k]);
+                                    links[link].run_link(link, previous, progress, |i, row| {
+                                        let slow = if link == slow_link { 400 } else { 0 };
+                                        for _ in 0..(row * 7 + i * 13) % 50 + slow {
+                                            std::hint::spin_loop();
+                                        }
+                                        let now = clock.fetch_add(1, Ordering::SeqCst);
+                                        let item = offsets[link] + i;
+                                        log[item * rows + row].lock().unwrap().push(now);
+                                    });
+                                }
+                            });
+                        }
+                    });
+                    let ran: Vec<usize> = log
+                        .into_iter()
+                        .map(|runs| {
+                            let runs = runs.into_inner().unwrap();
+                            assert_eq!(runs.len(), 1, "every strip runs once");
+                            runs[0]
+                        })
+                        .collect();
+                    for (i, ri, j, rj) in sharing_pairs(&spans, rows) {
+                        assert!(
+                            ran[i * rows + ri] < ran[j * rows + rj],
+                            "links {sizes:?} on {threads} threads: ({i}, {ri}) after ({j}, {rj}) \
+                             ({:?})",
+                            place[i]
+                        );
+                    }
+                }
+            }
+        }
     }
 
     /// A part needs room for both margins: too many parts do not fit.
