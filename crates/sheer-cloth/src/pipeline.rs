@@ -244,7 +244,9 @@ struct Timing {
 
 /// How far each part of a [`Pipeline`] has come: `2s + 1` once its boundary items of stage `s` are done,
 /// `2s + 2` once all its items of stage `s` are. Also how long the parts were busy, from which it learns
-/// how far to move the cuts so that they are equally busy ([`rebalance`](Progress::rebalance)).
+/// how far to move the cuts so that they are equally busy ([`rebalance`](Progress::rebalance)). A chain
+/// of wavefronts uses its counters too, each link's counting the steps it has finished
+/// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)).
 pub(crate) struct Progress {
     counters: Vec<Counter>,
     poisoned: AtomicBool,
@@ -408,7 +410,7 @@ impl Progress {
         while self.counters[q].0.load(Ordering::Acquire) < value {
             assert!(
                 !self.poisoned.load(Ordering::Relaxed),
-                "another part of the sub-step panicked"
+                "another part (or link) of the sub-steps panicked"
             );
             if spins < SPINS_BEFORE_YIELDING {
                 spins += 1;

@@ -956,7 +956,6 @@ impl Simulation {
         } else {
             (WAVEFRONT_MIN_PARTICLES, WAVEFRONT_ROWS_PER_DEPTH)
         };
-        // A whole step on a team in equal parts goes as a chain of wavefronts on its threads.
         // A whole step on a team of threads can go as a chain of wavefronts instead (`Wavefront::run_link`).
         let chain_team = step
             .and(team_threads())
@@ -1051,13 +1050,14 @@ impl Simulation {
             });
             // On a team, a chain where each of its links holds more sub-steps than a pass in parts
             // would: both stream a row from memory once a pass (or link), but a chain has no seams to
-            // make room for (crate README, "A chain of wavefronts").
+            // make room for (crate README, "A chain of wavefronts"). Where no pass fits the parts the
+            // step goes sub-step by sub-step as before: a chain there is not measured.
             if let (GridSweep::Auto, Some(team)) = (sweep_order, chain_team) {
                 let sizes = link_sizes(substep_count, most, team);
                 let shortest = sizes.iter().copied().min().unwrap_or(1);
                 if in_parts
                     .as_ref()
-                    .is_none_or(|(_, _, per_pass, _)| shortest > *per_pass)
+                    .is_some_and(|(_, _, per_pass, _)| shortest > *per_pass)
                 {
                     let longest = sizes.iter().copied().max().unwrap_or(1);
                     break 'plan Some((passes_of(&sizes), 1, longest, Some(team)));
@@ -2259,14 +2259,22 @@ mod tests {
 
     /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a pass
     /// (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with the wind held
-    /// for two sub-steps. On one thread in one part; on a team of two as a chain where its links hold
-    /// more sub-steps than the passes in parts would (384 columns: links of five against passes of
-    /// two or three), else in parts (1 400 columns: one sub-step a pass either way).
+    /// for two sub-steps. On one thread in one part. On a team (whose threads claim the passes index by
+    /// index at these sizes) as a chain where its links hold more sub-steps than the passes in parts
+    /// would: 384 columns on two to four threads (links of four or five against passes of at most
+    /// two). Else in parts: 1 400 columns on two threads (one sub-step a pass either way); and sub-step
+    /// by sub-step where no pass fits the parts: 144 rows on three threads.
     #[test]
     fn left_to_choose_a_large_grid_takes_several_sub_steps_a_pass_with_the_same_bits() {
         use crate::sim::GridSweep;
         let method = Method::SmallStepsXpbd { substeps: 20 };
-        for (columns, rows, chained) in [(384, 288, true), (1400, 144, false)] {
+        // (columns, rows, threads, whether a team chains it: None where the step goes sub-step by sub-step).
+        let cases = [
+            (384, 288, [1, 2, 3, 4].as_slice(), Some(true)),
+            (1400, 144, [1, 2].as_slice(), Some(false)),
+            (1400, 144, [3].as_slice(), None),
+        ];
+        for (columns, rows, thread_counts, chained) in cases {
             assert!(columns * rows >= super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES);
             let run = |sweep: GridSweep, threads: usize| {
                 let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
@@ -2279,21 +2287,19 @@ mod tests {
             let (passes, _) = run(GridSweep::Passes, 1);
             // A sub-step keeps 12 rows in flight (the wind, the prediction and a sweep's 10).
             let most = super::substeps_in_flight(columns, 12, 20);
-            let what = format!("{columns} × {rows}");
-            assert_eq!(most >= 4, chained, "{what}: {most} sub-steps a pass");
-            for threads in [1, 2] {
+            for &threads in thread_counts {
+                let what = format!("{columns} × {rows} on {threads} threads");
                 let (bits, (per_pass, in_chain)) = run(GridSweep::Auto, threads);
-                assert!(
-                    bits == passes,
-                    "{what}, {threads} threads: not the bits of pass by pass"
-                );
-                if threads == 1 {
-                    assert_eq!((per_pass, in_chain), (most, false), "{what}");
-                } else if chained {
-                    let longest = super::link_sizes(20, most, 2).into_iter().max();
-                    assert_eq!((Some(per_pass), in_chain), (longest, true), "{what}");
-                } else {
-                    assert_eq!((per_pass, in_chain), (1, false), "{what}");
+                assert!(bits == passes, "{what}: not the bits of pass by pass");
+                match (threads, chained) {
+                    (1, _) => assert_eq!((per_pass, in_chain), (most, false), "{what}"),
+                    (_, Some(true)) => {
+                        let longest = super::link_sizes(20, most, threads).into_iter().max();
+                        assert_eq!((Some(per_pass), in_chain), (longest, true), "{what}");
+                        assert!(per_pass >= 4, "{what}: links of {per_pass}");
+                    }
+                    (_, Some(false)) => assert_eq!((per_pass, in_chain), (1, false), "{what}"),
+                    (_, None) => assert_eq!((per_pass, in_chain), (0, false), "{what}"),
                 }
             }
         }

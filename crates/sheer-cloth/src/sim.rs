@@ -235,7 +235,7 @@ pub(crate) enum GridSweep {
     /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
     /// ([`Pipeline`](crate::pipeline::Pipeline)); it must fit.
     Pipeline,
-    /// On a team in equal parts (it must have one), a whole step as a chain of wavefronts
+    /// On a team of threads (it must have one), a whole step as a chain of wavefronts
     /// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)), links of `substeps_per_link`
     /// sub-steps (the last may have fewer), link `k` on thread `k mod threads`; sub-step by sub-step
     /// pass by pass where a whole step cannot go in wavefronts.

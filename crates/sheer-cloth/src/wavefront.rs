@@ -99,7 +99,7 @@ impl Wavefront {
         progress: &Progress,
         mut work: impl FnMut(usize, usize),
     ) {
-        debug_assert!(link > 0 || previous.is_none());
+        debug_assert_eq!(link > 0, previous.is_some());
         let poison = progress.poison_if_unwinding();
         // The steps link `link − 1` was last seen to have finished.
         let mut seen = 0;
