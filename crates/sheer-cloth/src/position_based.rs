@@ -61,9 +61,10 @@ const MIN_PARALLEL_BATCH: usize = 2048;
 const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
 
 /// A grid's whole step runs as wavefronts of several sub-steps a pass from this many particles: below it
-/// pass by pass measured as fast (256 × 256) or faster (181 × 181); at 362 × 362 the passes of several
-/// sub-steps took 0.61–0.83× as long on one thread (crate README, "Several sub-steps a pass").
-const WHOLE_STEP_WAVEFRONT_MIN_PARTICLES: usize = 98_304;
+/// pass by pass measured as fast (200 × 200) or faster (181 × 181); at 256 × 256 the passes of several
+/// sub-steps took 0.90× as long on one thread (median), at 362 × 362 0.61–0.83× (crate README, "Several
+/// sub-steps a pass" and "From 65 536 particles").
+const WHOLE_STEP_WAVEFRONT_MIN_PARTICLES: usize = 65_536;
 
 /// With threads, the wavefront of one sub-step needs this many rows per thread per row of its depth:
 /// the seams around the cuts between the threads' parts, twice the depth each, run on one thread each.
