@@ -2105,6 +2105,25 @@ mod tests {
         }
     }
 
+    /// Methods for the whole-step tests: two that go in whole steps (small-steps XPBD, PBD with two
+    /// sweeps) and XPBD with multipliers, which goes sub-step by sub-step.
+    const WHOLE_STEP_METHODS: [Method; 3] = [
+        Method::SmallStepsXpbd { substeps: 20 },
+        Method::Pbd {
+            substeps: 3,
+            iterations: 2,
+            stiffness: 1.0,
+        },
+        Method::Xpbd {
+            substeps: 2,
+            iterations: 2,
+        },
+    ];
+
+    /// Winds for the whole-step tests, (speed in m/s, sub-steps it is held for): renewed every sub-step,
+    /// held for three, none.
+    const WHOLE_STEP_WINDS: [(f64, u32); 3] = [(6.0, 1), (6.0, 3), (0.0, 1)];
+
     /// A whole step in wavefronts of several sub-steps a pass (the pins moved on and the wind renewed
     /// inside the pass) gives the bits of pass by pass: small-steps XPBD and PBD, with the wind renewed
     /// every sub-step, held for three and off, a turning and swaying pole, passes of 1, 2, 3 and up to
@@ -2114,19 +2133,7 @@ mod tests {
     #[test]
     fn a_whole_step_in_wavefronts_of_several_sub_steps_gives_the_bits_of_pass_by_pass() {
         use crate::sim::GridSweep;
-        let methods = [
-            Method::SmallStepsXpbd { substeps: 20 },
-            Method::Pbd {
-                substeps: 3,
-                iterations: 2,
-                stiffness: 1.0,
-            },
-            Method::Xpbd {
-                substeps: 2,
-                iterations: 2,
-            },
-        ];
-        let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
+        let (methods, winds) = (WHOLE_STEP_METHODS, WHOLE_STEP_WINDS);
         let rows = 133;
         let mut fewer = 0;
         for method in methods {
@@ -2181,19 +2188,7 @@ mod tests {
     #[test]
     fn a_whole_step_as_a_chain_of_wavefronts_gives_the_bits_of_pass_by_pass() {
         use crate::sim::GridSweep;
-        let methods = [
-            Method::SmallStepsXpbd { substeps: 20 },
-            Method::Pbd {
-                substeps: 3,
-                iterations: 2,
-                stiffness: 1.0,
-            },
-            Method::Xpbd {
-                substeps: 2,
-                iterations: 2,
-            },
-        ];
-        let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
+        let (methods, winds) = (WHOLE_STEP_METHODS, WHOLE_STEP_WINDS);
         for method in methods {
             let whole_steps = !matches!(method, Method::Xpbd { .. });
             for (speed, interval) in winds {
