@@ -957,7 +957,8 @@ impl Simulation {
         } else {
             (WAVEFRONT_MIN_PARTICLES, WAVEFRONT_ROWS_PER_DEPTH)
         };
-        // A whole step on a team of threads can go as a chain of wavefronts instead (`Wavefront::run_link`).
+        // A whole step on a team of threads can go as a chain of wavefronts instead
+        // (`Wavefront::run_link`).
         let chain_team = step
             .and(team_threads())
             .filter(|&team| parallel && team > 1);
