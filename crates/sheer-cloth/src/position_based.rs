@@ -61,9 +61,9 @@ const MIN_PARALLEL_BATCH: usize = 2048;
 const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
 
 /// A grid's whole step runs as wavefronts of several sub-steps a pass from this many particles: below it
-/// pass by pass measured as fast (200 × 200) or faster (181 × 181); at 256 × 256 the passes of several
-/// sub-steps took 0.90× as long on one thread (median), at 362 × 362 0.61–0.83× (crate README, "Several
-/// sub-steps a pass" and "From 65 536 particles").
+/// pass by pass measured as fast on one thread and faster on two (200 × 200), or faster (181 × 181);
+/// at 256 × 256 the passes of several sub-steps took 0.90× as long on one thread (median), at 362 × 362
+/// 0.61–0.83× (crate README, "Several sub-steps a pass" and "From 65 536 particles").
 const WHOLE_STEP_WAVEFRONT_MIN_PARTICLES: usize = 65_536;
 
 /// With threads, the wavefront of one sub-step needs this many rows per thread per row of its depth:
@@ -528,7 +528,8 @@ impl Simulation {
     /// threads the passes go either in parts (the rows cut between the threads, the seams around the
     /// cuts after them) or as a chain, one pass (*link*) per thread at a time, each following the one
     /// before down the rows ([`Wavefront::run_link`]): the chain where its links hold more sub-steps
-    /// than the parts' passes could, the seams needing rows (crate README, "A chain of wavefronts").
+    /// than the parts' passes could, the seams needing rows, and only where passes in parts fit (else
+    /// sub-step by sub-step; crate README, "A chain of wavefronts").
     pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
         let (iterations, pbd_stiffness) = match self.params.method {
             Method::Pbd {
@@ -2282,7 +2283,8 @@ mod tests {
                 (state_bits(&sim), run)
             };
             let (passes, _) = run(GridSweep::Passes, 1);
-            // A sub-step keeps 12 rows in flight (the wind, the prediction and a sweep's 10).
+            // A sub-step keeps 12 rows in flight: its depth, 11 (the wind's 1 and a sweep's 10), and
+            // one.
             let most = super::substeps_in_flight(columns, 12, 20);
             for &threads in thread_counts {
                 let what = format!("{columns} × {rows} on {threads} threads");

@@ -216,7 +216,8 @@ pub(crate) struct RowForces {
 pub(crate) enum GridSweep {
     /// A whole step as wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`
     /// (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, as a chain of them where its links
-    /// hold more sub-steps than passes in parts would), a sub-step as one wavefront from
+    /// hold more sub-steps than passes in parts would, and only where passes in parts fit), a sub-step
+    /// as one wavefront from
     /// `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows per thread for the seams:
     /// `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
     #[default]
