@@ -392,14 +392,20 @@ pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std
     })
 }
 
+/// `f` of the team this thread leads, `None` without one.
+fn with_leading_team<R>(f: impl FnOnce(&Team) -> R) -> Option<R> {
+    // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread, and
+    // the reference does not outlive this call.
+    let team = unsafe { LEADING.get().as_ref() }?;
+    Some(f(team))
+}
+
 /// The number of threads of the team this thread leads, when the team splits its passes into equal
 /// parts ([`Team::run`]): then a pass over `0..threads` gives each thread one index, and all of them run
 /// at once. `None` without a team, or when its passes are claimed chunk by chunk.
 pub(crate) fn team_in_equal_parts() -> Option<usize> {
-    let team = LEADING.get();
-    // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread.
-    let team = unsafe { team.as_ref() }?;
-    (!team.claim.load(Ordering::Relaxed)).then_some(team.threads)
+    with_leading_team(|team| (!team.claim.load(Ordering::Relaxed)).then_some(team.threads))
+        .flatten()
 }
 
 /// The number of threads of the team this thread leads, however it splits its passes: a pass over
@@ -407,10 +413,7 @@ pub(crate) fn team_in_equal_parts() -> Option<usize> {
 /// index, a thread that has finished its index claims one nobody has yet, so an index that waits for
 /// another never waits for one left unclaimed. `None` without a team.
 pub(crate) fn team_threads() -> Option<usize> {
-    let team = LEADING.get();
-    // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread.
-    let team = unsafe { team.as_ref() }?;
-    Some(team.threads)
+    with_leading_team(|team| team.threads)
 }
 
 /// Runs `work` on parts of `0..len` that together cover it once: on the team this thread leads (see
@@ -419,15 +422,16 @@ pub(crate) fn team_threads() -> Option<usize> {
 /// give the same result however `0..len` is split, which holds when each index is independent of the
 /// others.
 pub(crate) fn parts(len: usize, parallel: bool, grain: usize, work: impl Fn(Range<usize>) + Sync) {
-    let team = LEADING.get();
-    if parallel && !team.is_null() {
-        // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread.
-        let team = unsafe { &*team };
-        if len >= team.threads {
-            team.run(len, grain, &work);
-        } else {
-            work(0..len);
-        }
+    let on_team = parallel
+        && with_leading_team(|team| {
+            if len >= team.threads {
+                team.run(len, grain, &work);
+            } else {
+                work(0..len);
+            }
+        })
+        .is_some();
+    if on_team {
         return;
     }
     if !parallel || len <= grain {
