@@ -149,7 +149,7 @@ impl Pipeline {
         mut work: impl FnMut(usize, Range<usize>),
     ) {
         debug_assert!(p < self.parts && progress.counters.len() >= self.parts);
-        let poison = Poison(progress);
+        let poison = progress.poison_if_unwinding();
         let started = progress.epoch.elapsed();
         let mut waited = Duration::ZERO;
         for (s, stage) in self.stages.iter().enumerate() {

@@ -103,20 +103,18 @@ impl Wavefront {
         let poison = progress.poison_if_unwinding();
         // The steps link `link − 1` was last seen to have finished.
         let mut seen = 0;
-        for t in 0..self.steps() {
+        let before_step = |t: usize| {
+            // Steps `0..t` are done.
+            progress.publish(link, t);
             if let Some(previous) = previous {
                 let needed = previous.finished_before(t);
                 if seen < needed {
                     seen = progress.wait_at_least(link - 1, needed);
                 }
             }
-            for (i, &lag) in self.lags.iter().enumerate() {
-                if let Some(row) = t.checked_sub(lag).filter(|&row| row < self.rows) {
-                    work(i, row);
-                }
-            }
-            progress.publish(link, t + 1);
-        }
+        };
+        self.sweep(|_| 0..self.rows, before_step, &mut work);
+        progress.publish(link, self.steps());
         poison.disarm();
     }
 
@@ -157,6 +155,7 @@ impl Wavefront {
                 };
                 first..last.max(first)
             },
+            |_| {},
             work,
         );
     }
@@ -168,13 +167,19 @@ impl Wavefront {
         let cut = self.cut(seam, parts);
         self.sweep(
             |i| cut - self.lags[i]..cut + self.lags[i] + self.spans[i],
+            |_| {},
             work,
         );
     }
 
-    /// Steps `t` from the first to the last, running item `i` on row `t − lagᵢ` where that row lies in
-    /// `rows_of(i)`.
-    fn sweep(&self, rows_of: impl Fn(usize) -> Range<usize>, mut work: impl FnMut(usize, usize)) {
+    /// Steps `t` from the first to the last, running `before_step(t)` and then item `i` on row `t − lagᵢ`
+    /// where that row lies in `rows_of(i)`.
+    fn sweep(
+        &self,
+        rows_of: impl Fn(usize) -> Range<usize>,
+        mut before_step: impl FnMut(usize),
+        mut work: impl FnMut(usize, usize),
+    ) {
         let ranges: Vec<Range<usize>> = (0..self.lags.len()).map(rows_of).collect();
         let steps = ranges
             .iter()
@@ -184,6 +189,7 @@ impl Wavefront {
             .reduce(|a, b| a.start.min(b.start)..a.end.max(b.end));
         let Some(steps) = steps else { return };
         for t in steps {
+            before_step(t);
             for (i, (rows, &lag)) in ranges.iter().zip(&self.lags).enumerate() {
                 if let Some(row) = t.checked_sub(lag).filter(|row| rows.contains(row)) {
                     work(i, row);
