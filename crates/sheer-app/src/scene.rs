@@ -1041,7 +1041,7 @@ mod key_tests {
         Scene::from_toml(text, &assets()).map_err(|e| e.to_string())
     }
 
-    use super::{value_at as lookup, value_at_mut as lookup_mut};
+    use super::{value_at, value_at_mut};
 
     /// Every leaf key of a TOML table, dotted.
     fn leaf_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
@@ -1136,7 +1136,7 @@ mod key_tests {
             let scene = parse(&text).unwrap_or_else(|e| panic!("{text}: {e}"));
             let mut written: toml::Table = toml::from_str(&scene.to_toml()).unwrap();
             let expected: toml::Table = toml::from_str(&format!("v = {value}")).unwrap();
-            assert_eq!(lookup(&written, path), Some(&expected["v"]), "{text}");
+            assert_eq!(value_at(&written, path), Some(&expected["v"]), "{text}");
             let default: toml::Table = toml::from_str(
                 &Scene {
                     static_sheet: path.starts_with("static_sheet.").then(StaticSheet::default),
@@ -1145,24 +1145,24 @@ mod key_tests {
                 .to_toml(),
             )
             .unwrap();
-            assert_ne!(lookup(&default, path), Some(&expected["v"]), "{path}");
+            assert_ne!(value_at(&default, path), Some(&expected["v"]), "{path}");
             // Every other key is the default scene's, as `assets/default.scene.toml` promises: not
             // the default of the key's own table, which for the wind is the library's still air.
-            match lookup(&default, path) {
-                Some(value) => *lookup_mut(&mut written, path).unwrap() = value.clone(),
+            match value_at(&default, path) {
+                Some(value) => *value_at_mut(&mut written, path).unwrap() = value.clone(),
                 // A key the default leaves out (an optional texture).
                 None => {
                     let (table, key) = path.rsplit_once('.').unwrap();
-                    let table = lookup_mut(&mut written, table).unwrap();
+                    let table = value_at_mut(&mut written, table).unwrap();
                     table.as_table_mut().unwrap().remove(key);
                 }
             }
             if *path == "simulation.wind.per_substep" {
                 // Held for the whole frame, the wind has no renewal interval.
                 let interval =
-                    lookup_mut(&mut written, "simulation.wind.renewal_interval").unwrap();
+                    value_at_mut(&mut written, "simulation.wind.renewal_interval").unwrap();
                 assert_eq!(*interval, toml::Value::Float(0.0));
-                *interval = lookup(&default, "simulation.wind.renewal_interval")
+                *interval = value_at(&default, "simulation.wind.renewal_interval")
                     .unwrap()
                     .clone();
             }
