@@ -133,6 +133,58 @@ fn bench_sim_times_the_flag_without_spring_damping() {
     assert!(ms > 0.0 && ms.is_finite(), "{text}");
 }
 
+/// `sheer bench memory --csv` prints a row per case and thread count, each a finite positive rate,
+/// and on several threads the ratio to one on stderr.
+#[test]
+fn bench_memory_prints_the_documented_csv() {
+    let out = sheer(&[
+        "bench",
+        "memory",
+        "--csv",
+        "--megabytes",
+        "4",
+        "--cache-megabytes",
+        "1",
+        "--threads",
+        "1,2",
+        "--seconds",
+        "0",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("case,threads,megabytes,gigabytes_per_s"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let cases: Vec<[&str; 3]> = rows.iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let mut expected = vec![
+        ["read", "1", "4"],
+        ["read", "2", "4"],
+        ["read_write", "1", "4"],
+        ["read_write", "2", "4"],
+    ];
+    if std::thread::available_parallelism().map_or(1, |n| n.get()) >= 2 {
+        expected.extend([
+            ["read_own_written", "1", "1"],
+            ["read_other_written", "1", "1"],
+            ["read_evicted", "1", "1"],
+        ]);
+    }
+    assert_eq!(cases, expected, "{text}");
+    for row in &rows {
+        let rate: f64 = row[3].parse().expect("a measured rate");
+        assert!(rate.is_finite() && rate > 0.0, "{text}");
+    }
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("2 threads against one: read ") && stderr.contains("read_write "),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn bad_arguments_are_one_line_errors_with_a_failing_status() {
     for args in [
@@ -141,6 +193,12 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
         &["bench", "sim", "--grid", "1x46"],
         &["bench", "sim", "--threads", "0"],
         &["bench", "sim", "--substeps", "0"],
+        &["bench", "memory", "--megabytes", "0"],
+        &["bench", "memory", "--megabytes", "-8"],
+        &["bench", "memory", "--cache-megabytes", "5000"],
+        &["bench", "memory", "--threads", "0"],
+        &["bench", "memory", "--threads", "1,64"],
+        &["bench", "memory", "--seconds", "NaN"],
     ] {
         let out = sheer(args);
         assert_eq!(out.status.code(), Some(1), "{args:?}");

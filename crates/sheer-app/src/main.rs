@@ -4,6 +4,7 @@
 //! also on one line).
 
 mod assets;
+mod bench_memory;
 mod bench_render;
 mod bench_sim;
 mod frame;
@@ -151,6 +152,9 @@ enum BenchCommand {
     Sim(bench_sim::BenchSimArgs),
     /// Frames per second of the case study per evaluation path and baseline, with per-stage times.
     Render(bench_render::BenchRenderArgs),
+    /// Memory bandwidth on one core and on several, and a core reading what another just wrote: the
+    /// ceiling on what threads gain on a large cloth.
+    Memory(bench_memory::BenchMemoryArgs),
 }
 
 fn main() -> ExitCode {
@@ -195,6 +199,7 @@ fn main() -> ExitCode {
         }
         Some(Command::Bench(BenchCommand::Sim(args))) => bench_sim::run(args),
         Some(Command::Bench(BenchCommand::Render(args))) => bench_render::run(args),
+        Some(Command::Bench(BenchCommand::Memory(args))) => bench_memory::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

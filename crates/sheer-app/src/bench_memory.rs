@@ -1,0 +1,338 @@
+//! `sheer bench memory`: how fast this machine's memory feeds one core and several, and how fast a core
+//! reads what another core has just written, measured in one run. A large cloth's step waits on memory
+//! for part of its time, and no second thread makes that part faster than the second row here makes
+//! memory: these figures bound the two-thread speed-up of `sheer bench sim` on large grids
+//! (`crates/sheer-cloth/README.md`, "Against the target").
+
+use std::fmt::Write as _;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use clap::Args;
+
+use crate::CliError;
+use crate::bench_sim::check_seconds;
+
+/// The most megabytes a buffer, or all the threads' buffers together, may have: beyond it a typo would
+/// take the machine's memory.
+const MAX_MEGABYTES: usize = 4096;
+
+/// Rounds of the hand-over case (each writes and reads the cache-sized buffer three times).
+const HANDOVER_ROUNDS: usize = 24;
+
+#[derive(Debug, Args)]
+pub struct BenchMemoryArgs {
+    /// Megabytes each thread streams in the read and read-write cases, in [1, 4096]: well beyond the
+    /// last-level cache, so that they measure memory.
+    #[arg(long, default_value_t = 256, allow_negative_numbers = true)]
+    pub megabytes: i64,
+    /// Megabytes of the hand-over case's buffer, in [1, 4096]: within the last-level cache, so that
+    /// reading it after a write measures where the written data is (the build machine's cores share
+    /// 32 MiB; the default 6 is what two sub-steps of a 1 024-column cloth keep in flight).
+    #[arg(long, default_value_t = 6, allow_negative_numbers = true)]
+    pub cache_megabytes: i64,
+    /// Thread counts of the read and read-write cases (comma-separated). Default: 1 and all cores.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub threads: Vec<i64>,
+    /// Minimum measuring time per streaming case, seconds, in [0, 3600] (at least one pass is timed).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub seconds: f64,
+    /// Print CSV: case,threads,megabytes,gigabytes_per_s
+    #[arg(long)]
+    pub csv: bool,
+}
+
+/// A count given on the command line, checked to lie in `range`.
+fn count_in(
+    name: &str,
+    value: i64,
+    range: std::ops::RangeInclusive<usize>,
+) -> Result<usize, CliError> {
+    usize::try_from(value)
+        .ok()
+        .filter(|v| range.contains(v))
+        .ok_or_else(|| {
+            CliError::new(format!(
+                "--{name} must lie in [{}, {}], got {value}",
+                range.start(),
+                range.end()
+            ))
+        })
+}
+
+/// The sum of `buffer` in eight running sums, which the compiler keeps in vector registers: a pure
+/// stream of loads.
+fn sum(buffer: &[f64]) -> f64 {
+    let mut lanes = [0.0; 8];
+    for chunk in buffer.chunks_exact(8) {
+        for (lane, x) in lanes.iter_mut().zip(chunk) {
+            *lane += x;
+        }
+    }
+    lanes.iter().sum::<f64>() + buffer.chunks_exact(8).remainder().iter().sum::<f64>()
+}
+
+/// Reads and writes every element of `buffer` once (a map that keeps the values bounded, towards 2).
+fn update(buffer: &mut [f64]) {
+    for x in buffer {
+        *x = *x * 0.5 + 1.0;
+    }
+}
+
+/// Gigabytes a second of `bytes` moved in `time`.
+fn gigabytes_per_s(bytes: usize, time: Duration) -> f64 {
+    bytes as f64 / time.as_secs_f64().max(1e-9) * 1e-9
+}
+
+/// What a streaming case does to its thread's buffer in one pass, and how many bytes that moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Stream {
+    /// Every element read.
+    Read,
+    /// Every element read and written.
+    ReadWrite,
+}
+
+impl Stream {
+    fn name(self) -> &'static str {
+        match self {
+            Stream::Read => "read",
+            Stream::ReadWrite => "read_write",
+        }
+    }
+
+    fn pass(self, buffer: &mut [f64]) {
+        match self {
+            Stream::Read => {
+                std::hint::black_box(sum(std::hint::black_box(&*buffer)));
+            }
+            Stream::ReadWrite => update(std::hint::black_box(buffer)),
+        }
+    }
+
+    /// Bytes moved by a pass over `elements` elements.
+    fn bytes(self, elements: usize) -> usize {
+        match self {
+            Stream::Read => 8 * elements,
+            Stream::ReadWrite => 16 * elements,
+        }
+    }
+}
+
+/// `threads` threads each making `passes` passes of `stream` over a buffer of its own (`elements`
+/// long, written first by that thread, so that it lies in that thread's memory), all starting
+/// together: the bytes all moved over the time the slowest took, GB/s.
+fn stream_together(stream: Stream, threads: usize, elements: usize, passes: usize) -> f64 {
+    let ready = AtomicUsize::new(0);
+    let times: Vec<Duration> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                let ready = &ready;
+                scope.spawn(move || {
+                    let mut buffer = vec![1.0; elements];
+                    stream.pass(&mut buffer);
+                    // Spinning rather than parking, so that every thread holds its core.
+                    ready.fetch_add(1, Ordering::AcqRel);
+                    while ready.load(Ordering::Acquire) < threads {
+                        std::hint::spin_loop();
+                    }
+                    let start = Instant::now();
+                    for _ in 0..passes {
+                        stream.pass(&mut buffer);
+                    }
+                    start.elapsed()
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().expect("a streaming thread panicked"))
+            .collect()
+    });
+    let slowest = times.into_iter().max().unwrap_or_default();
+    gigabytes_per_s(threads * passes * stream.bytes(elements), slowest)
+}
+
+/// Read bandwidths of a cache-sized buffer of `elements`, GB/s, each the median of its rounds: just
+/// written by this thread, just written by another thread (on another core: both threads spin), and
+/// written by this thread and then evicted by streaming `evict_elements` elements of its own.
+struct Handover {
+    own: f64,
+    other: f64,
+    evicted: f64,
+}
+
+fn handover(elements: usize, evict_elements: usize) -> Handover {
+    let shared = Mutex::new(vec![1.0; elements]);
+    let turn = AtomicUsize::new(0);
+    let wait_for = |turn: &AtomicUsize, value: usize| {
+        while turn.load(Ordering::Acquire) != value {
+            std::hint::spin_loop();
+        }
+    };
+    let bytes = 8 * elements;
+    let mut found = Handover {
+        own: 0.0,
+        other: 0.0,
+        evicted: 0.0,
+    };
+    std::thread::scope(|scope| {
+        // The writer: fills the buffer on its turn.
+        scope.spawn(|| {
+            for round in 0..HANDOVER_ROUNDS {
+                wait_for(&turn, 2 * round);
+                update(&mut shared.lock().expect("the reader panicked"));
+                turn.store(2 * round + 1, Ordering::Release);
+            }
+        });
+        let reader = scope.spawn(|| {
+            let mut evict = vec![1.0; evict_elements];
+            let mut rates = [const { Vec::new() }; 3];
+            let timed_read = |buffer: &[f64]| {
+                let start = Instant::now();
+                std::hint::black_box(sum(std::hint::black_box(buffer)));
+                gigabytes_per_s(bytes, start.elapsed())
+            };
+            for round in 0..HANDOVER_ROUNDS {
+                wait_for(&turn, 2 * round + 1);
+                let mut buffer = shared.lock().expect("the writer panicked");
+                rates[1].push(timed_read(&buffer));
+                update(&mut buffer);
+                rates[0].push(timed_read(&buffer));
+                update(&mut buffer);
+                std::hint::black_box(sum(std::hint::black_box(&evict)));
+                update(&mut evict);
+                rates[2].push(timed_read(&buffer));
+                drop(buffer);
+                turn.store(2 * round + 2, Ordering::Release);
+            }
+            rates.map(|mut r| {
+                r.sort_by(f64::total_cmp);
+                r[r.len() / 2]
+            })
+        });
+        let [own, other, evicted] = reader.join().expect("the reading thread panicked");
+        found = Handover {
+            own,
+            other,
+            evicted,
+        };
+    });
+    found
+}
+
+pub fn run(args: &BenchMemoryArgs) -> Result<(), CliError> {
+    check_seconds(args.seconds)?;
+    let megabytes = count_in("megabytes", args.megabytes, 1..=MAX_MEGABYTES)?;
+    let cache_megabytes = count_in("cache-megabytes", args.cache_megabytes, 1..=MAX_MEGABYTES)?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut threads: Vec<usize> = if args.threads.is_empty() {
+        vec![1, cores]
+    } else {
+        args.threads
+            .iter()
+            .map(|&t| count_in("threads", t, 1..=256))
+            .collect::<Result<_, _>>()?
+    };
+    threads.dedup();
+    // Every thread streams a buffer of its own, all at once.
+    let most_threads = threads.iter().copied().max().unwrap_or(1);
+    if most_threads * megabytes > MAX_MEGABYTES {
+        return Err(CliError::new(format!(
+            "--threads × --megabytes must be at most {MAX_MEGABYTES} MB (every thread streams a \
+             buffer of its own), got {most_threads} × {megabytes}"
+        )));
+    }
+    let elements = megabytes * (1 << 20) / 8;
+    let row = |case: &str, threads: usize, megabytes: usize, rate: f64| {
+        let mut line = String::new();
+        if args.csv {
+            let _ = write!(line, "{case},{threads},{megabytes},{rate:.2}");
+        } else {
+            let _ = write!(line, "{case:<20} {threads:>7} {megabytes:>9} {rate:>10.2}");
+        }
+        println!("{line}");
+    };
+    if args.csv {
+        println!("case,threads,megabytes,gigabytes_per_s");
+    } else {
+        println!(
+            "{:<20} {:>7} {:>9} {:>10}",
+            "case", "threads", "MB each", "GB/s"
+        );
+    }
+    let mut ratios = Vec::new();
+    for stream in [Stream::Read, Stream::ReadWrite] {
+        // Passes enough for the minimum time, from one timed pass of one thread.
+        let mut buffer = vec![1.0; elements];
+        stream.pass(&mut buffer);
+        let start = Instant::now();
+        stream.pass(&mut buffer);
+        let pass = start.elapsed().as_secs_f64().max(1e-9);
+        drop(buffer);
+        let passes = ((args.seconds / pass).ceil() as usize).max(1);
+        let rates: Vec<(usize, f64)> = threads
+            .iter()
+            .map(|&t| (t, stream_together(stream, t, elements, passes)))
+            .collect();
+        for &(t, rate) in &rates {
+            row(stream.name(), t, megabytes, rate);
+        }
+        if let (Some(&(1, one)), Some(&(many, rate))) = (rates.first(), rates.last())
+            && many > 1
+        {
+            ratios.push(format!("{} {:.2}×", stream.name(), rate / one));
+        }
+    }
+    if cores >= 2 {
+        let cache_elements = cache_megabytes * (1 << 20) / 8;
+        let found = handover(cache_elements, elements);
+        row("read_own_written", 1, cache_megabytes, found.own);
+        row("read_other_written", 1, cache_megabytes, found.other);
+        row("read_evicted", 1, cache_megabytes, found.evicted);
+    } else {
+        eprintln!("the hand-over case needs two cores; this machine shows one");
+    }
+    if !ratios.is_empty() {
+        // To stderr, so that the CSV stays CSV.
+        eprintln!(
+            "{} threads against one: {} (a step waiting on memory gains no more from them)",
+            threads.last().copied().unwrap_or(1),
+            ratios.join(", ")
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sum covers every element, the remainder after the blocks of eight too.
+    #[test]
+    fn the_sum_adds_every_element() {
+        for n in [0, 1, 7, 8, 9, 100] {
+            let buffer: Vec<f64> = (1..=n).map(|i| i as f64).collect();
+            assert_eq!(sum(&buffer), (n * (n + 1) / 2) as f64, "{n} elements");
+        }
+    }
+
+    /// Streaming and handing over a small buffer give finite, positive rates.
+    #[test]
+    fn every_case_measures_a_finite_positive_rate() {
+        for stream in [Stream::Read, Stream::ReadWrite] {
+            for threads in [1, 2] {
+                let rate = stream_together(stream, threads, 1 << 12, 3);
+                assert!(
+                    rate.is_finite() && rate > 0.0,
+                    "{stream:?} on {threads}: {rate}"
+                );
+            }
+        }
+        let found = handover(1 << 12, 1 << 14);
+        for rate in [found.own, found.other, found.evicted] {
+            assert!(rate.is_finite() && rate > 0.0, "{rate}");
+        }
+    }
+}
