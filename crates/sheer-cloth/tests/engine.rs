@@ -210,6 +210,47 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
 }
 
 #[test]
+fn small_steps_xpbd_stretches_more_on_wider_flags_until_they_diverge() {
+    // The documented failure region of small-steps XPBD (crate README, "Known failure regions"): at a
+    // fixed number of sub-steps, its springs stretch the more the more particles lie across the flag
+    // from the pole, until a wide flag diverges. Measured at ×20 in the default flag's wind over its
+    // first 30 frames (half a second), the largest stretch strain of any spring: 0.24 with 64 columns,
+    // 0.52 with 128, 1.14 with 256, 3.7 with 512; 1 024 columns reach 9.2 and diverge at frame 26 (a
+    // spring past ten times its rest length).
+    let largest_stretch = |columns: usize| -> Result<f64, StepError> {
+        let spec = GridSpec {
+            columns,
+            ..GridSpec::default()
+        };
+        let model = ClothModel::grid(&spec)
+            .unwrap()
+            .with_hoist_pinned()
+            .unwrap();
+        let params = SimParams {
+            method: Method::SmallStepsXpbd { substeps: 20 },
+            ..SimParams::waving_flag()
+        };
+        let mut sim = Simulation::new(model, params).unwrap();
+        let mut largest: f64 = 0.0;
+        for _ in 0..30 {
+            sim.step(1.0 / 60.0)?;
+            largest = largest.max(sim.max_strain(Some(SpringKind::Stretch)));
+        }
+        Ok(largest)
+    };
+    let strains = [64, 128, 256, 512].map(|columns| largest_stretch(columns).unwrap());
+    assert!(strains[0] < 0.3, "{strains:?}");
+    for pair in strains.windows(2) {
+        assert!(pair[1] > 1.8 * pair[0], "{strains:?}");
+    }
+    assert!(strains[3] > 2.0, "{strains:?}");
+    assert!(
+        matches!(largest_stretch(1024), Err(StepError::Diverged { .. })),
+        "{strains:?}"
+    );
+}
+
+#[test]
 fn wind_updated_every_few_sub_steps_lies_between_every_sub_step_and_once_per_frame() {
     // Holding the wind for a whole frame's sub-steps (the default method's count) is exactly holding it
     // for the frame, bit for bit; held for two sub-steps it is neither that nor every sub-step (the
