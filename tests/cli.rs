@@ -9,6 +9,20 @@ fn sheer(args: &[&str]) -> std::process::Output {
         .expect("the sheer binary runs")
 }
 
+/// `sheer` with `args`, after checking that it succeeded: its stdout and its stderr.
+fn sheer_ok(args: &[&str]) -> (String, String) {
+    let out = sheer(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
 /// `sheer bench sim --csv` on the 16 × 11 flag, one thread, one frame per case, with `options`: its
 /// output, after checking that it succeeded.
 fn bench_sim_csv(options: &[&str]) -> String {
@@ -24,13 +38,7 @@ fn bench_sim_csv(options: &[&str]) -> String {
         "0",
     ];
     args.extend_from_slice(options);
-    let out = sheer(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
+    sheer_ok(&args).0
 }
 
 #[test]
@@ -68,7 +76,7 @@ fn bench_sim_prints_the_documented_csv() {
 #[test]
 fn bench_sim_prints_the_thread_handoff_beside_two_thread_runs() {
     let run = |threads: &str| {
-        let out = sheer(&[
+        let (stdout, stderr) = sheer_ok(&[
             "bench",
             "sim",
             "--csv",
@@ -82,16 +90,10 @@ fn bench_sim_prints_the_thread_handoff_beside_two_thread_runs() {
             "0",
         ]);
         assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let stdout = String::from_utf8(out.stdout).unwrap();
-        assert!(
             stdout.lines().skip(1).all(|l| l.starts_with("pbd,16,11,")),
             "{stdout}"
         );
-        String::from_utf8(out.stderr).unwrap()
+        stderr
     };
     let two = run("1,2");
     let line = two
@@ -137,7 +139,7 @@ fn bench_sim_times_the_flag_without_spring_damping() {
 /// and on several threads the ratio to one on stderr.
 #[test]
 fn bench_memory_prints_the_documented_csv() {
-    let out = sheer(&[
+    let (text, stderr) = sheer_ok(&[
         "bench",
         "memory",
         "--csv",
@@ -150,12 +152,6 @@ fn bench_memory_prints_the_documented_csv() {
         "--seconds",
         "0",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("case,threads,megabytes,gigabytes_per_s"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
@@ -178,7 +174,6 @@ fn bench_memory_prints_the_documented_csv() {
         let rate: f64 = row[3].parse().expect("a measured rate");
         assert!(rate.is_finite() && rate > 0.0, "{text}");
     }
-    let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(
         stderr.contains("2 threads against one: read ") && stderr.contains("read_write "),
         "{stderr}"
@@ -211,18 +206,13 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
 #[test]
 fn simulate_writes_one_obj_per_frame() {
     let dir = std::env::temp_dir().join(format!("sheer-simulate-{}", std::process::id()));
-    let out = sheer(&[
+    sheer_ok(&[
         "simulate",
         "--frames",
         "3",
         "--out-dir",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     for frame in 0..3 {
         let text = std::fs::read_to_string(dir.join(format!("frame_{frame:04}.obj"))).unwrap();
         // The default flag: 64 × 46 particles, 2 × 63 × 45 triangles, every vertex finite.
@@ -340,12 +330,7 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
         );
     }
     args.push("--force");
-    let out = sheer(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    sheer_ok(&args);
     let choice = std::fs::read_to_string(dir.join("choice.toml")).unwrap();
     let table: toml::Table = toml::from_str(&choice).unwrap();
     assert_eq!(table["quick"].as_bool(), Some(true));
