@@ -284,6 +284,35 @@ fn bad_scene_files_are_one_line_errors_naming_the_problem() {
     );
 }
 
+/// A flag in its failure region (1 024 columns at the default ×40 in the default wind diverges at frame
+/// 45: crates/sheer-cloth/README.md, "Known failure regions") ends `sheer simulate` with one line that
+/// names the frame and says what keeps the divergence away.
+#[test]
+fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
+    let dir = std::env::temp_dir().join(format!("sheer-wide-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("wide.scene.toml");
+    std::fs::write(&scene, "[flag]\ncolumns = 1024\n").unwrap();
+    let out = sheer(&[
+        "simulate",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        "60",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: frame 45: step 45 diverged: ")
+            && stderr.contains("more sub-steps a frame"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn study_choose_quick_writes_the_choice_and_its_sweep() {
     // The quick study (12 × 9 flag, coverage over 0.25–0.5 s) end to end through the binary: a few

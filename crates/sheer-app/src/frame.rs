@@ -141,12 +141,12 @@ impl FlagScene {
     }
 
     /// Advances the scene by `dt` seconds: simulation step, then normals. A diverged step is reported
-    /// and leaves the last good state.
+    /// ([`step_failure`]) and leaves the last good state.
     pub fn advance(&mut self, dt: f32, times: &mut StageTimes) -> Result<(), CliError> {
         let start = Instant::now();
         if let Some(sim) = &mut self.simulation {
             sim.step(f64::from(dt))
-                .map_err(|e| CliError::new(format!("simulation: {e}")))?;
+                .map_err(|e| CliError::new(format!("simulation: {}", step_failure(&e))))?;
         }
         self.time += dt;
         self.copy_positions();
@@ -168,6 +168,18 @@ impl FlagScene {
         }
         self.scene.simulation = params;
         Ok(())
+    }
+}
+
+/// What went wrong in a step, for a person: a divergence with what keeps it away (the flag's known
+/// failure regions: more sub-steps, a coarser grid, less wind; crates/sheer-cloth/README.md).
+pub fn step_failure(error: &sheer_cloth::StepError) -> String {
+    match error {
+        sheer_cloth::StepError::Diverged { .. } => format!(
+            "{error} (more sub-steps a frame, fewer columns or less wind keep it away: \
+             crates/sheer-cloth/README.md, \"Known failure regions\")"
+        ),
+        _ => error.to_string(),
     }
 }
 

@@ -88,8 +88,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let dt = 1.0 / f64::from(scene.render.fps);
     let progress = crate::progress_bar(u64::from(args.frames), "simulating");
     for frame in 0..args.frames {
-        sim.step(dt)
-            .map_err(|e| CliError::new(format!("frame {frame}: {e}")))?;
+        sim.step(dt).map_err(|e| {
+            CliError::new(format!("frame {frame}: {}", crate::frame::step_failure(&e)))
+        })?;
         write(
             &args.out_dir.join(format!("frame_{frame:04}.obj")),
             &obj_text(&sim, &uvs, frame),
