@@ -15,18 +15,20 @@ fn stable_methods() -> Vec<Method> {
         .collect()
 }
 
+/// The flag of `spec`, its hoist pinned, simulated with `params`.
+fn hoist_pinned(spec: &GridSpec, params: SimParams) -> Simulation {
+    let model = ClothModel::grid(spec).unwrap().with_hoist_pinned().unwrap();
+    Simulation::new(model, params).unwrap()
+}
+
 fn windy_flag(method: Method, parallel_min_particles: usize) -> Simulation {
-    let model = ClothModel::grid(&GridSpec::default())
-        .unwrap()
-        .with_hoist_pinned()
-        .unwrap();
     let mut params = SimParams {
         method,
         parallel_min_particles,
         ..SimParams::default()
     };
     params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
-    Simulation::new(model, params).unwrap()
+    hoist_pinned(&GridSpec::default(), params)
 }
 
 fn bits(sim: &Simulation) -> Vec<[u64; 3]> {
@@ -86,16 +88,12 @@ fn identical_bits_on_a_grid_long_enough_for_claimed_chunks() {
             .build()
             .unwrap();
         pool.install(|| {
-            let model = ClothModel::grid(&spec)
-                .unwrap()
-                .with_hoist_pinned()
-                .unwrap();
             let mut params = SimParams {
                 parallel_min_particles,
                 ..SimParams::default()
             };
             params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
-            let mut sim = Simulation::new(model, params).unwrap();
+            let mut sim = hoist_pinned(&spec, params);
             for _ in 0..3 {
                 sim.step(1.0 / 60.0).unwrap();
             }
@@ -117,13 +115,9 @@ fn realistic_fabric_flag_runs_at_60_hz_with_the_default_method() {
             areal_density,
             ..GridSpec::default()
         };
-        let model = ClothModel::grid(&spec)
-            .unwrap()
-            .with_hoist_pinned()
-            .unwrap();
         let mut params = SimParams::default();
         params.wind.velocity = DVec3::new(8.0, 0.0, 2.0);
-        let mut sim = Simulation::new(model, params).unwrap();
+        let mut sim = hoist_pinned(&spec, params);
         for _ in 0..600 {
             sim.step(1.0 / 60.0).unwrap();
         }
@@ -156,11 +150,7 @@ fn long_range_attachments_keep_a_hanging_flag_from_stretching() {
         params.method = Method::SmallStepsXpbd { substeps };
         params.long_range_attachments = attachments;
         params.wind.velocity = DVec3::ZERO;
-        let model = ClothModel::grid(&GridSpec::default())
-            .unwrap()
-            .with_hoist_pinned()
-            .unwrap();
-        let mut sim = Simulation::new(model, params).unwrap();
+        let mut sim = hoist_pinned(&GridSpec::default(), params);
         (0..120)
             .map(|_| {
                 sim.step(1.0 / 60.0).unwrap();
@@ -191,15 +181,11 @@ fn wind_held_over_a_frame_fails_for_light_fabric_in_strong_wind() {
         ..GridSpec::default()
     };
     let run = |per_substep: bool, renewal_interval: f64| {
-        let model = ClothModel::grid(&spec)
-            .unwrap()
-            .with_hoist_pinned()
-            .unwrap();
         let mut params = SimParams::default();
         params.wind.velocity = DVec3::new(12.0, 0.0, 3.0);
         params.wind.per_substep = per_substep;
         params.wind.renewal_interval = renewal_interval;
-        let mut sim = Simulation::new(model, params).unwrap();
+        let mut sim = hoist_pinned(&spec, params);
         (0..600).try_for_each(|_| sim.step(1.0 / 60.0).map(|_| ()))
     };
     assert!(matches!(run(false, 0.0), Err(StepError::Diverged { .. })));
@@ -222,15 +208,11 @@ fn small_steps_xpbd_stretches_more_on_wider_flags_until_they_diverge() {
             columns,
             ..GridSpec::default()
         };
-        let model = ClothModel::grid(&spec)
-            .unwrap()
-            .with_hoist_pinned()
-            .unwrap();
         let params = SimParams {
             method: Method::SmallStepsXpbd { substeps: 20 },
             ..SimParams::waving_flag()
         };
-        let mut sim = Simulation::new(model, params).unwrap();
+        let mut sim = hoist_pinned(&spec, params);
         let mut largest: f64 = 0.0;
         for _ in 0..30 {
             sim.step(1.0 / 60.0)?;
