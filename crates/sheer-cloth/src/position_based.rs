@@ -1001,8 +1001,6 @@ impl Simulation {
                     })
                     .collect()
             };
-            let spans_of =
-                |items: &[(WaveItem, usize)]| items.iter().map(|(_, span)| *span).collect();
             let one = items_of(0..1);
             // A sub-step can follow another in the same pass only with its prediction among the items
             // (its attachments' pins near enough).
@@ -1013,7 +1011,7 @@ impl Simulation {
                 Some(per_pass) => per_pass.clamp(1, substep_count),
                 None => substeps_in_flight(
                     columns,
-                    Wavefront::new(spans_of(&one), rows).depth() + 1,
+                    WaveItem::wavefront(&one, rows).depth() + 1,
                     substep_count,
                 ),
             };
@@ -1025,7 +1023,7 @@ impl Simulation {
                     .map(|&size| {
                         let items = items_of(first..first + size);
                         first += size;
-                        (Wavefront::new(spans_of(&items), rows), items)
+                        (WaveItem::wavefront(&items, rows), items)
                     })
                     .collect()
             };
@@ -1501,6 +1499,11 @@ impl WaveItem {
         items
     }
 
+    /// The wavefront of `items` over `rows` rows: their row spans, in order.
+    fn wavefront(items: &[(WaveItem, usize)], rows: usize) -> Wavefront {
+        Wavefront::new(items.iter().map(|(_, span)| *span).collect(), rows)
+    }
+
     /// Whether the items run the sub-step's prediction (and the wind's shares) themselves.
     fn has_prediction(items: &[(WaveItem, usize)]) -> bool {
         items
@@ -1951,14 +1954,12 @@ mod tests {
     #[test]
     fn the_prediction_runs_before_every_attachment_that_reads_its_pins() {
         use super::WaveItem;
-        use crate::wavefront::Wavefront;
         use crate::wavefront::tests::{before, schedule};
         let sim = windy_flag(9, 20, 3.0, Method::default(), false);
         let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
-        let spans_of = |items: &[(WaveItem, usize)]| items.iter().map(|(_, span)| *span).collect();
         // Whether every end of a sweep runs surely after the predictions within `reach` rows of it.
         let ordered = |items: &[(WaveItem, usize)], reach: usize, rows: usize, parts: usize| {
-            let slots = schedule(&Wavefront::new(spans_of(items), rows), parts);
+            let slots = schedule(&WaveItem::wavefront(items, rows), parts);
             let predict = items
                 .iter()
                 .position(|(item, _)| matches!(item, WaveItem::Predict { .. }));
@@ -1986,7 +1987,7 @@ mod tests {
                         continue;
                     }
                     for rows in [40, 61, 131, 240] {
-                        let plan = Wavefront::new(spans_of(&items), rows);
+                        let plan = WaveItem::wavefront(&items, rows);
                         for parts in (1..=6).filter(|&parts| plan.fits(parts)) {
                             assert!(
                                 ordered(&items, reach, rows, parts),
@@ -2004,7 +2005,7 @@ mod tests {
         // reads.
         let items = WaveItem::of_substep(0, true, by_last_row, 1, 10);
         let broken = [40, 61, 131, 240].into_iter().any(|rows| {
-            let plan = Wavefront::new(spans_of(&items), rows);
+            let plan = WaveItem::wavefront(&items, rows);
             (1..=6)
                 .filter(|&parts| plan.fits(parts))
                 .any(|parts| !ordered(&items, 11, rows, parts))
@@ -2314,15 +2315,13 @@ mod tests {
     #[test]
     fn in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again() {
         use super::WaveItem;
-        use crate::wavefront::Wavefront;
         use crate::wavefront::tests::{before, schedule};
         let sim = windy_flag(9, 20, 3.0, Method::default(), false);
         let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
         // Whether the schedule keeps every attachment after its sub-step's predictions within `reach`
         // and before those of the sub-step `reuse` on (the one that gathers into its buffer again).
         let ordered = |items: &[(WaveItem, usize)], reach, rows, parts, reuse| {
-            let spans = items.iter().map(|(_, span)| *span).collect();
-            let slots = schedule(&Wavefront::new(spans, rows), parts);
+            let slots = schedule(&WaveItem::wavefront(items, rows), parts);
             let predict_of = |s| {
                 items
                     .iter()
@@ -2354,9 +2353,8 @@ mod tests {
                                 WaveItem::of_substep(s, renewing(s), by_last_row, sweeps, reach)
                             })
                             .collect();
-                        let spans: Vec<usize> = items.iter().map(|(_, span)| *span).collect();
                         for rows in [61, 131, 240] {
-                            let plan = Wavefront::new(spans.clone(), rows);
+                            let plan = WaveItem::wavefront(&items, rows);
                             for parts in (1..=4).filter(|&parts| plan.fits(parts)) {
                                 assert!(
                                     ordered(&items, reach, rows, parts, 2),
@@ -2434,9 +2432,7 @@ mod tests {
                         for rows in [5, 31, 90] {
                             let links: Vec<Wavefront> = links_items
                                 .iter()
-                                .map(|items| {
-                                    Wavefront::new(items.iter().map(|(_, s)| *s).collect(), rows)
-                                })
+                                .map(|items| WaveItem::wavefront(items, rows))
                                 .collect();
                             for threads in 2..=4 {
                                 let before = chain_before(&links, threads);
