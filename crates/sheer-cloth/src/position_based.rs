@@ -1036,7 +1036,12 @@ impl Simulation {
             };
             if forced_chain {
                 let team = chain_team.expect("the chain needs a team of threads");
-                break 'plan Some((passes_of(&even(most)), 1, most, Some(team)));
+                break 'plan Some(WavefrontPlan {
+                    passes: passes_of(&even(most)),
+                    parts: 1,
+                    most_per_pass: most,
+                    chain_team: Some(team),
+                });
             }
             // In parts: as many sub-steps a pass as fit the parts, at most `most`.
             let in_parts = (1..=most).rev().find_map(|per_pass| {
@@ -1047,7 +1052,12 @@ impl Simulation {
                             && threads > 1
                             && rows < rows_per_depth * threads * plan.depth())
                 });
-                fit.then_some((passes, parts, per_pass, None))
+                fit.then_some(WavefrontPlan {
+                    passes,
+                    parts,
+                    most_per_pass: per_pass,
+                    chain_team: None,
+                })
             });
             // On a team, a chain where each of its links holds more sub-steps than a pass in parts
             // would: both stream a row from memory once a pass (or link), but a chain has no seams to
@@ -1058,10 +1068,15 @@ impl Simulation {
                 let shortest = sizes.iter().copied().min().unwrap_or(1);
                 if in_parts
                     .as_ref()
-                    .is_some_and(|(_, _, per_pass, _)| shortest > *per_pass)
+                    .is_some_and(|plan| shortest > plan.most_per_pass)
                 {
                     let longest = sizes.iter().copied().max().unwrap_or(1);
-                    break 'plan Some((passes_of(&sizes), 1, longest, Some(team)));
+                    break 'plan Some(WavefrontPlan {
+                        passes: passes_of(&sizes),
+                        parts: 1,
+                        most_per_pass: longest,
+                        chain_team: Some(team),
+                    });
                 }
             }
             // A test's fixed order: refusing it would let the test compare pass by pass with itself (a
@@ -1075,7 +1090,7 @@ impl Simulation {
         // Whether the wavefront does the wind and the prediction itself.
         let prediction_in_wavefront = wavefront
             .as_ref()
-            .is_some_and(|(passes, ..)| WaveItem::has_prediction(&passes[0].1));
+            .is_some_and(|plan| WaveItem::has_prediction(&plan.passes[0].1));
         // The whole sub-step as one hand-off to a team whose threads each keep their own rows.
         let pipeline = 'plan: {
             let team = parallel.then(team_in_equal_parts).flatten();
@@ -1373,7 +1388,13 @@ impl Simulation {
                 }
             });
         }
-        if let Some((passes, parts_count, per_pass, chain)) = wavefront {
+        if let Some(WavefrontPlan {
+            passes,
+            parts: parts_count,
+            most_per_pass: per_pass,
+            chain_team: chain,
+        }) = wavefront
+        {
             if step.is_some() {
                 *wavefront_substeps_per_pass = per_pass;
                 *wavefront_chained = chain.is_some();
@@ -1447,6 +1468,19 @@ impl Simulation {
         }
         true
     }
+}
+
+/// How a grid's sub-step, or a whole step, goes as wavefronts
+/// ([`Simulation::project_grid_constraints`]).
+struct WavefrontPlan {
+    /// Each pass (a chain's link) and its items.
+    passes: Vec<(Wavefront, Vec<(WaveItem, usize)>)>,
+    /// The parts each pass cuts the rows into (1 in a chain).
+    parts: usize,
+    /// The most sub-steps a pass (or link) holds.
+    most_per_pass: usize,
+    /// In a chain, the team's threads that its links go to in turn.
+    chain_team: Option<usize>,
 }
 
 /// What an item of a grid sub-step's wavefront ([`Wavefront`]) does on its last row.
