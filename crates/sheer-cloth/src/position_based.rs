@@ -2469,7 +2469,7 @@ mod tests {
                                 .map(|items| WaveItem::wavefront(items, rows))
                                 .collect();
                             for threads in 2..=4 {
-                                let before = chain_before(&links, threads);
+                                let before = chain_before(&links, threads, 0);
                                 let ordered = |reuse: usize| {
                                     let ends =
                                         links_items.iter().enumerate().flat_map(|(l, items)| {

@@ -299,7 +299,7 @@ pub(crate) mod tests {
     /// link starts that step, by the waits of [`Wavefront::run_link`] and the order of each thread's
     /// links: the link before has finished [`Wavefront::finished_before`] of its steps; a link that has
     /// started a step started after the links before it on its thread and after its own wait there.
-    pub(crate) fn chain_finished(
+    fn chain_finished(
         links: &[Wavefront],
         threads: usize,
     ) -> impl Fn(usize, usize) -> Vec<usize> + '_ {
@@ -330,10 +330,12 @@ pub(crate) mod tests {
 
     /// For a chain of `links` on `threads` threads: whether strip `a` surely runs before strip `b`, each
     /// given as (link, item of the link, last row): earlier in the same link's sweep, or in an earlier
-    /// link at a step that link has surely finished when `b`'s link starts `b`'s step.
+    /// link at a step that link has surely finished when `b`'s link starts `b`'s step, with `slack`
+    /// steps to spare (0: as the waits are; 1: were each wait a step shorter).
     pub(crate) fn chain_before(
         links: &[Wavefront],
         threads: usize,
+        slack: usize,
     ) -> impl Fn((usize, usize, usize), (usize, usize, usize)) -> bool + '_ {
         let finished = chain_finished(links, threads);
         move |(la, ia, ra), (lb, ib, rb)| {
@@ -341,7 +343,7 @@ pub(crate) mod tests {
             if la == lb {
                 (ta, ia) < (tb, ib)
             } else {
-                la < lb && ta < finished(lb, tb)[la]
+                la < lb && ta + slack < finished(lb, tb)[la]
             }
         }
     }
@@ -408,22 +410,15 @@ pub(crate) mod tests {
             let sizes: Vec<usize> = sizes.iter().map(|s| s * per_substep).collect();
             for rows in [5, 31, 90] {
                 let (links, place) = links_of(&spans, &sizes, rows);
-                let step_of = |item: usize, row: usize| {
-                    let (link, i) = place[item];
-                    (link, row + links[link].lags[i], i)
-                };
+                // Item `item` of the whole on row `row` as (link, item of the link, row).
+                let strip = |item: usize, row: usize| (place[item].0, place[item].1, row);
                 for threads in 2..=4 {
-                    let finished = chain_finished(&links, threads);
                     let pairs = sharing_pairs(&spans, rows);
                     let ordered = |slack: usize| {
-                        pairs.iter().all(|&(i, ri, j, rj)| {
-                            let (a, b) = (step_of(i, ri), step_of(j, rj));
-                            if a.0 == b.0 {
-                                (a.1, a.2) < (b.1, b.2)
-                            } else {
-                                a.1 + slack < finished(b.0, b.1)[a.0]
-                            }
-                        })
+                        let before = chain_before(&links, threads, slack);
+                        pairs
+                            .iter()
+                            .all(|&(i, ri, j, rj)| before(strip(i, ri), strip(j, rj)))
                     };
                     assert!(
                         ordered(0),
