@@ -482,7 +482,7 @@ fn value_at<'a>(table: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
     }
 }
 
-/// As [`value_at`], to be replaced.
+/// As [`value_at`], mutably: the value for the caller to replace.
 fn value_at_mut<'a>(table: &'a mut toml::Table, path: &str) -> Option<&'a mut toml::Value> {
     let (head, rest) = path.split_once('.').unwrap_or((path, ""));
     let value = table.get_mut(head)?;
