@@ -50,6 +50,18 @@ pub enum ModelError {
     InvalidMass { index: usize, mass: f64 },
     #[error("this operation needs a grid cloth, but the cloth was built from a mesh")]
     NotAGrid,
+    #[error("{field} has {len} entries, but the cloth has {particle_count} particles")]
+    LengthMismatch {
+        field: &'static str,
+        len: usize,
+        particle_count: usize,
+    },
+    #[error("a {columns}×{rows} grid does not fit a cloth of {particle_count} particles")]
+    GridShapeMismatch {
+        columns: usize,
+        rows: usize,
+        particle_count: usize,
+    },
 }
 
 /// A parameter outside its valid range; `name` is the field path as written in a scene file.

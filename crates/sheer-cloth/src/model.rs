@@ -117,7 +117,7 @@ impl GridShape {
         let mut triangles =
             Vec::with_capacity(2 * columns.saturating_sub(1) * rows.saturating_sub(1));
         for row in 0..rows.saturating_sub(1) {
-            for column in 0..columns - 1 {
+            for column in 0..columns.saturating_sub(1) {
                 let top_left = self.index(row, column) as u32;
                 let top_right = self.index(row, column + 1) as u32;
                 let bottom_left = self.index(row + 1, column) as u32;
@@ -233,15 +233,7 @@ impl ClothModel {
             .map(|t| [t[0], t[1], t[2]])
             .collect();
         for (t, tri) in triangles.iter().enumerate() {
-            for &index in tri {
-                if index as usize >= positions.len() {
-                    return Err(ModelError::IndexOutOfRange {
-                        triangle: t,
-                        index,
-                        vertex_count: positions.len(),
-                    });
-                }
-            }
+            check_triangle_indices(t, tri, positions.len())?;
         }
         let masses = lumped_masses(positions, &triangles, areal_density)?;
         // Edge → the far corners of the triangles that share it, in triangle order (deterministic).
@@ -302,44 +294,64 @@ impl ClothModel {
         masses: &[f64],
         springs: &[Spring],
     ) -> Result<ClothModel, ModelError> {
-        if positions.is_empty() {
-            return Err(ModelError::EmptyMesh);
-        }
-        check_positions(positions)?;
-        if masses.len() != positions.len() {
-            return Err(ModelError::InvalidMass {
-                index: masses.len().min(positions.len()),
-                mass: f64::NAN,
-            });
-        }
-        for (index, &mass) in masses.iter().enumerate() {
-            if !(mass.is_finite() && mass > 0.0) {
-                return Err(ModelError::InvalidMass { index, mass });
-            }
-        }
-        for (s, spring) in springs.iter().enumerate() {
-            for index in [spring.a, spring.b] {
-                if index as usize >= positions.len() {
-                    return Err(ModelError::SpringOutOfRange {
-                        spring: s,
-                        index,
-                        particle_count: positions.len(),
-                    });
-                }
-            }
-            if spring.a == spring.b || !(spring.rest_length.is_finite() && spring.rest_length > 0.0)
-            {
-                return Err(ModelError::DegenerateSpring(s));
-            }
-        }
-        Ok(ClothModel {
+        let model = ClothModel {
             positions: positions.to_vec(),
             masses: masses.to_vec(),
             triangles: Vec::new(),
             springs: springs.to_vec(),
             pinned: vec![false; positions.len()],
             grid: None,
-        })
+        };
+        model.validate()?;
+        Ok(model)
+    }
+
+    /// Checks what [`Simulation::new`](crate::Simulation::new) relies on, for a model built or edited
+    /// field by field or deserialised (the constructors above check it as they build): at least one
+    /// particle, a mass and a pin flag per particle, finite positions, finite positive masses, triangles
+    /// and springs that name existing particles, triangles that are not degenerate at rest, springs of
+    /// two distinct particles with a finite positive rest length, and a grid shape of at least 2×2 that
+    /// holds exactly the particles.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let particle_count = self.positions.len();
+        if particle_count == 0 {
+            return Err(ModelError::EmptyMesh);
+        }
+        for (field, len) in [("masses", self.masses.len()), ("pinned", self.pinned.len())] {
+            if len != particle_count {
+                return Err(ModelError::LengthMismatch {
+                    field,
+                    len,
+                    particle_count,
+                });
+            }
+        }
+        check_positions(&self.positions)?;
+        for (index, &mass) in self.masses.iter().enumerate() {
+            if !(mass.is_finite() && mass > 0.0) {
+                return Err(ModelError::InvalidMass { index, mass });
+            }
+        }
+        for (t, tri) in self.triangles.iter().enumerate() {
+            check_triangle_indices(t, tri, particle_count)?;
+            healthy_triangle_area(&self.positions, t, *tri)?;
+        }
+        for (s, spring) in self.springs.iter().enumerate() {
+            check_spring(s, spring, particle_count)?;
+        }
+        if let Some(GridShape { columns, rows }) = self.grid {
+            if columns < 2 || rows < 2 {
+                return Err(ModelError::GridTooSmall { columns, rows });
+            }
+            if columns.checked_mul(rows) != Some(particle_count) {
+                return Err(ModelError::GridShapeMismatch {
+                    columns,
+                    rows,
+                    particle_count,
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Number of particles.
@@ -355,6 +367,13 @@ impl ClothModel {
     /// Pins the given particles.
     pub fn pin(&mut self, indices: &[usize]) -> Result<&mut Self, ModelError> {
         let particle_count = self.positions.len();
+        if self.pinned.len() != particle_count {
+            return Err(ModelError::LengthMismatch {
+                field: "pinned",
+                len: self.pinned.len(),
+                particle_count,
+            });
+        }
         if let Some(&index) = indices.iter().find(|&&i| i >= particle_count) {
             return Err(ModelError::PinOutOfRange {
                 index,
@@ -397,6 +416,66 @@ fn check_density(areal_density: f64) -> Result<(), ModelError> {
     }
 }
 
+fn check_triangle_indices(
+    triangle: usize,
+    corners: &[u32; 3],
+    vertex_count: usize,
+) -> Result<(), ModelError> {
+    match corners
+        .iter()
+        .find(|&&index| index as usize >= vertex_count)
+    {
+        Some(&index) => Err(ModelError::IndexOutOfRange {
+            triangle,
+            index,
+            vertex_count,
+        }),
+        None => Ok(()),
+    }
+}
+
+fn check_spring(index: usize, spring: &Spring, particle_count: usize) -> Result<(), ModelError> {
+    if let Some(particle) = [spring.a, spring.b]
+        .into_iter()
+        .find(|&p| p as usize >= particle_count)
+    {
+        return Err(ModelError::SpringOutOfRange {
+            spring: index,
+            index: particle,
+            particle_count,
+        });
+    }
+    if spring.a == spring.b || !(spring.rest_length.is_finite() && spring.rest_length > 0.0) {
+        return Err(ModelError::DegenerateSpring(index));
+    }
+    Ok(())
+}
+
+/// The area (m²) of triangle `t` at rest, or an error if it is degenerate: its area negligible against
+/// its squared longest edge (a sliver or a collapsed triangle, not merely a small one: a fine mesh has
+/// small but healthy triangles), or a corner repeated.
+fn healthy_triangle_area(
+    positions: &[DVec3],
+    t: usize,
+    [a, b, c]: [u32; 3],
+) -> Result<f64, ModelError> {
+    let (pa, pb, pc) = (
+        positions[a as usize],
+        positions[b as usize],
+        positions[c as usize],
+    );
+    let area = 0.5 * (pb - pa).cross(pc - pa).length();
+    let longest = (pb - pa)
+        .length_squared()
+        .max((pc - pb).length_squared())
+        .max((pa - pc).length_squared());
+    let healthy = area > 1e-9 * longest; // false for NaN too
+    if !healthy || a == b || b == c || a == c {
+        return Err(ModelError::DegenerateTriangle { triangle: t, area });
+    }
+    Ok(area)
+}
+
 fn check_positions(positions: &[DVec3]) -> Result<(), ModelError> {
     match positions.iter().position(|p| !p.is_finite()) {
         Some(vertex) => Err(ModelError::NonFinitePosition(vertex)),
@@ -411,29 +490,18 @@ fn lumped_masses(
     areal_density: f64,
 ) -> Result<Vec<f64>, ModelError> {
     let mut masses = vec![0.0; positions.len()];
-    for (t, &[a, b, c]) in triangles.iter().enumerate() {
-        let (pa, pb, pc) = (
-            positions[a as usize],
-            positions[b as usize],
-            positions[c as usize],
-        );
-        let area = 0.5 * (pb - pa).cross(pc - pa).length();
-        // Degenerate means the area is negligible against the squared longest edge (a sliver or a
-        // collapsed triangle), not merely small: a fine mesh has small but healthy triangles.
-        let longest = (pb - pa)
-            .length_squared()
-            .max((pc - pb).length_squared())
-            .max((pa - pc).length_squared());
-        let healthy = area > 1e-9 * longest; // false for NaN too
-        if !healthy || a == b || b == c || a == c {
-            return Err(ModelError::DegenerateTriangle { triangle: t, area });
-        }
-        for i in [a, b, c] {
+    for (t, &corners) in triangles.iter().enumerate() {
+        let area = healthy_triangle_area(positions, t, corners)?;
+        for i in corners {
             masses[i as usize] += areal_density * area / 3.0;
         }
     }
     if let Some(i) = masses.iter().position(|&m| m <= 0.0) {
         return Err(ModelError::MasslessParticle(i));
+    }
+    // A finite density over a huge area can still overflow.
+    if let Some((index, &mass)) = masses.iter().enumerate().find(|(_, m)| !m.is_finite()) {
+        return Err(ModelError::InvalidMass { index, mass });
     }
     Ok(masses)
 }

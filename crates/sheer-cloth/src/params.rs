@@ -257,7 +257,8 @@ impl Method {
             Method::Verlet { substeps },
             Method::ImplicitEuler {
                 substeps,
-                cg_max_iterations: iterations.max(1) * 10,
+                // Ten per iteration; a cap beyond u32 is no cap at all, so it saturates.
+                cg_max_iterations: iterations.max(1).saturating_mul(10),
                 cg_tolerance: 1e-6,
             },
             Method::Pbd {
@@ -497,7 +498,7 @@ impl Wind {
             && substep.is_multiple_of(self.substeps_per_renewal(h))
     }
 
-    fn validate(&self) -> Result<(), ParamError> {
+    pub(crate) fn validate(&self) -> Result<(), ParamError> {
         finite_vec("wind.velocity", self.velocity)?;
         non_negative("wind.air_density", self.air_density)?;
         non_negative("wind.drag_coefficient", self.drag_coefficient)?;

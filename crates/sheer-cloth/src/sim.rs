@@ -304,22 +304,9 @@ impl Simulation {
     /// Builds a simulation at rest in the model's positions.
     pub fn new(model: ClothModel, params: SimParams) -> Result<Simulation, SetupError> {
         params.validate()?;
+        // The model's fields are public: one built or edited by hand is checked here.
+        model.validate()?;
         let n = model.positions.len();
-        if n == 0 {
-            return Err(ModelError::EmptyMesh.into());
-        }
-        if model.masses.len() != n || model.pinned.len() != n {
-            return Err(ModelError::InvalidMass {
-                index: model.masses.len().min(n),
-                mass: f64::NAN,
-            }
-            .into());
-        }
-        for (index, &mass) in model.masses.iter().enumerate() {
-            if !(mass.is_finite() && mass > 0.0) {
-                return Err(ModelError::InvalidMass { index, mass }.into());
-            }
-        }
         let (springs, colours, uncoloured) = colour_springs(n, &model.springs);
         let spring_incidence = Incidence::build(
             n,
@@ -387,7 +374,7 @@ impl Simulation {
         // The wind's shares of a grid's cells, split ([`SplitShares`]).
         let cells = grid_triangulation.map_or(0, |g| (g.columns - 1) * (g.rows - 1));
         Ok(Simulation {
-            wind: WindField::new(&params.wind),
+            wind: WindField::new(&params.wind)?,
             family: family_coefficients(&params),
             params,
             grid_constraints: model
@@ -833,7 +820,7 @@ impl Simulation {
     pub fn set_params(&mut self, params: SimParams) -> Result<(), ParamError> {
         params.validate()?;
         if params.wind != self.params.wind {
-            self.wind = WindField::new(&params.wind);
+            self.wind = WindField::new(&params.wind)?;
         }
         self.family = family_coefficients(&params);
         self.params = params;
@@ -889,11 +876,10 @@ impl Simulation {
         &self.velocities
     }
 
-    /// Writes f32 positions for a renderer (`out.len()` must equal the particle count).
-    pub fn write_positions_f32(&self, out: &mut [Vec3]) {
-        for (o, p) in out.iter_mut().zip(&self.positions) {
-            *o = p.as_vec3();
-        }
+    /// Replaces `out` with the positions in `f32`, for a renderer (reusing its allocation).
+    pub fn write_positions_f32(&self, out: &mut Vec<Vec3>) {
+        out.clear();
+        out.extend(self.positions.iter().map(|p| p.as_vec3()));
     }
 
     /// Replaces positions and velocities (for tests, studies and restarts). Pinned particles keep their
@@ -903,12 +889,18 @@ impl Simulation {
         positions: &[DVec3],
         velocities: &[DVec3],
     ) -> Result<(), ModelError> {
-        let n = self.positions.len();
-        if positions.len() != n || velocities.len() != n {
-            return Err(ModelError::InvalidDimension {
-                name: "state length",
-                value: positions.len().min(velocities.len()) as f64,
-            });
+        let particle_count = self.positions.len();
+        for (field, len) in [
+            ("positions", positions.len()),
+            ("velocities", velocities.len()),
+        ] {
+            if len != particle_count {
+                return Err(ModelError::LengthMismatch {
+                    field,
+                    len,
+                    particle_count,
+                });
+            }
         }
         if let Some(i) = positions
             .iter()

@@ -8,6 +8,7 @@
 
 use glam::DVec3;
 
+use crate::error::ParamError;
 use crate::params::Wind;
 
 const TERMS: usize = 4;
@@ -68,18 +69,21 @@ pub struct WindField {
 }
 
 impl WindField {
-    pub fn new(params: &Wind) -> WindField {
+    /// The field of `params`, which must be valid (finite velocity, non-negative coefficients, a
+    /// positive gust frequency: as [`SimParams::validate`](crate::SimParams::validate) checks them).
+    pub fn new(params: &Wind) -> Result<WindField, ParamError> {
+        params.validate()?;
         let mut state = params.seed;
         let along = Signal::new(&mut state, params.gust_frequency);
         let across = [
             Signal::new(&mut state, params.gust_frequency),
             Signal::new(&mut state, params.gust_frequency),
         ];
-        WindField {
+        Ok(WindField {
             params: *params,
             along,
             across,
-        }
+        })
     }
 
     pub fn params(&self) -> &Wind {

@@ -3,8 +3,8 @@
 
 use sheer_cloth::glam::{DAffine3, DVec3};
 use sheer_cloth::{
-    ClothModel, GridSpec, Method, ModelError, ParamError, SetupError, SimParams, Simulation,
-    SpringKind, StepError,
+    ClothModel, GridShape, GridSpec, Method, ModelError, ParamError, SetupError, SimParams,
+    Simulation, SpringKind, StepError, Wind,
 };
 
 /// Every method at its stable setting on the default flag at 60 Hz.
@@ -440,6 +440,169 @@ fn invalid_models_are_typed_errors() {
         Some(ModelError::NotAGrid)
     );
     assert!(Simulation::new(mesh, SimParams::default()).is_ok());
+}
+
+/// `ClothModel`'s fields are public (and it deserialises), so a model can skip the checked
+/// constructors. `Simulation::new` checks it instead: each of these panicked (an index out of bounds, a
+/// division by a zero column count) or looped on a zero-column grid before.
+#[test]
+fn a_model_built_field_by_field_is_checked_before_it_is_simulated() {
+    let good = ClothModel::grid(&GridSpec {
+        columns: 4,
+        rows: 3,
+        ..GridSpec::default()
+    })
+    .unwrap()
+    .with_hoist_pinned()
+    .unwrap();
+    assert_eq!(good.validate(), Ok(()));
+    let rejected = |f: &dyn Fn(&mut ClothModel)| {
+        let mut model = good.clone();
+        f(&mut model);
+        let from_validate = model.validate().err();
+        let from_new = match Simulation::new(model, SimParams::default()) {
+            Err(SetupError::Model(error)) => Some(error),
+            other => panic!("expected a model error, got {:?}", other.err()),
+        };
+        assert_eq!(from_validate, from_new);
+        from_new.unwrap()
+    };
+    assert_eq!(
+        rejected(&|m| m.springs[3].b = 99),
+        ModelError::SpringOutOfRange {
+            spring: 3,
+            index: 99,
+            particle_count: 12
+        }
+    );
+    assert_eq!(
+        rejected(&|m| m.springs[0].rest_length = 0.0),
+        ModelError::DegenerateSpring(0)
+    );
+    assert_eq!(
+        rejected(&|m| m.triangles[2][1] = 12),
+        ModelError::IndexOutOfRange {
+            triangle: 2,
+            index: 12,
+            vertex_count: 12
+        }
+    );
+    assert!(matches!(
+        rejected(&|m| m.triangles[5] = [0, 1, 1]),
+        ModelError::DegenerateTriangle { triangle: 5, .. }
+    ));
+    assert_eq!(
+        rejected(&|m| m.grid = Some(GridShape {
+            columns: 0,
+            rows: 2
+        })),
+        ModelError::GridTooSmall {
+            columns: 0,
+            rows: 2
+        }
+    );
+    assert_eq!(
+        rejected(&|m| m.grid = Some(GridShape {
+            columns: 3,
+            rows: 3
+        })),
+        ModelError::GridShapeMismatch {
+            columns: 3,
+            rows: 3,
+            particle_count: 12
+        }
+    );
+    assert_eq!(
+        rejected(&|m| {
+            m.masses.pop();
+        }),
+        ModelError::LengthMismatch {
+            field: "masses",
+            len: 11,
+            particle_count: 12
+        }
+    );
+    assert_eq!(
+        rejected(&|m| m.pinned.push(false)),
+        ModelError::LengthMismatch {
+            field: "pinned",
+            len: 13,
+            particle_count: 12
+        }
+    );
+    assert_eq!(
+        rejected(&|m| m.positions[7].y = f64::NAN),
+        ModelError::NonFinitePosition(7)
+    );
+    assert!(matches!(
+        rejected(&|m| m.masses[4] = f64::INFINITY),
+        ModelError::InvalidMass { index: 4, .. }
+    ));
+    assert_eq!(rejected(&|m| m.positions.clear()), ModelError::EmptyMesh);
+    // A shape with no cells has no triangles (this looped towards `usize::MAX` columns).
+    assert!(
+        GridShape {
+            columns: 0,
+            rows: 2
+        }
+        .triangles()
+        .is_empty()
+    );
+    // Pinning checks the pin flags' length before indexing them.
+    let mut short = good.clone();
+    short.pinned.truncate(5);
+    assert!(matches!(
+        short.pin(&[7]),
+        Err(ModelError::LengthMismatch {
+            field: "pinned",
+            ..
+        })
+    ));
+    // A finite density over an area too large for `f64` masses.
+    assert!(matches!(
+        ClothModel::grid(&GridSpec {
+            areal_density: 1e308,
+            width: 100.0,
+            height: 100.0,
+            ..GridSpec::default()
+        }),
+        Err(ModelError::InvalidMass { .. })
+    ));
+    // A restart with the wrong number of particles.
+    let mut sim = Simulation::new(good.clone(), SimParams::default()).unwrap();
+    let positions = good.positions.clone();
+    assert_eq!(
+        sim.set_state(&positions, &positions[1..]),
+        Err(ModelError::LengthMismatch {
+            field: "velocities",
+            len: 11,
+            particle_count: 12
+        })
+    );
+    // The f32 copy for a renderer takes the particle count whatever `out` held.
+    let mut out = vec![sheer_cloth::glam::Vec3::ZERO; 3];
+    sim.write_positions_f32(&mut out);
+    assert_eq!(out.len(), 12);
+    assert_eq!(out[5], positions[5].as_vec3());
+}
+
+/// The wind field checks its parameters itself (it is public, and `air_velocity` gave NaN for a NaN
+/// gust frequency); a CG cap of ten per iteration saturates instead of wrapping.
+#[test]
+fn the_public_helpers_refuse_what_the_parameters_refuse() {
+    let wind = Wind {
+        gust_frequency: f64::NAN,
+        ..Wind::default()
+    };
+    let error = sheer_cloth::wind::WindField::new(&wind).err().unwrap();
+    assert_eq!(error.name, "wind.gust_frequency");
+    assert!(sheer_cloth::wind::WindField::new(&Wind::default()).is_ok());
+    match Method::all_with_substeps(1, u32::MAX)[3] {
+        Method::ImplicitEuler {
+            cg_max_iterations, ..
+        } => assert_eq!(cg_max_iterations, u32::MAX),
+        other => panic!("expected implicit Euler, got {other:?}"),
+    }
 }
 
 #[test]
