@@ -30,18 +30,27 @@ pub(crate) fn reflected_path_factor(tau1: f64, mu0: f64, mu: f64) -> f64 {
 /// `∫_0^τ1 e^{−t/μ0} e^{−(τ1−t)/μ} dt/μ = μ0/(μ−μ0) (e^{−τ1/μ} − e^{−τ1/μ0})` (dimensionless), written
 /// with `expm1` so that it stays accurate at and near `μ = μ0` (limit `τ1 e^{−τ1/μ0}/μ0`); its grazing
 /// limit `μ → 0` is `e^{−τ1/μ0}`. Arguments are assumed validated.
+///
+/// It depends on the slant optical paths `a = τ1/μ` and `b = τ1/μ0` alone, `a (e^{−a} − e^{−b})/(b − a)`,
+/// and is computed from them: a path that overflows to ∞ (`μ = 0`, or a cosine as small as 10⁻³¹⁰, whose
+/// reciprocal overflows) takes its limit, where `1/μ0 − 1/μ` gave ∞ − ∞ = NaN.
 pub(crate) fn transmitted_path_factor(tau1: f64, mu0: f64, mu: f64) -> f64 {
-    if mu == 0.0 {
-        return (-tau1 / mu0).exp();
+    let (a, b) = (tau1 / mu, tau1 / mu0);
+    if a == f64::INFINITY {
+        // The grazing limit; 0 when b is infinite too.
+        return (-b).exp();
     }
-    // d = 1/μ0 − 1/μ; the integral is e^{−τ1/μ} (1 − e^{−τ1 d}) / (d μ).
-    let d = 1.0 / mu0 - 1.0 / mu;
-    if d == 0.0 {
-        tau1 * (-tau1 / mu).exp() / mu
-    } else if d > 0.0 {
-        (-tau1 / mu).exp() * -(-tau1 * d).exp_m1() / (d * mu)
+    if b == f64::INFINITY {
+        return 0.0;
+    }
+    // x = b − a = τ1 (1/μ0 − 1/μ); the integral is a e^{−a} (1 − e^{−x}) / x.
+    let x = b - a;
+    if x == 0.0 {
+        a * (-a).exp()
+    } else if x > 0.0 {
+        a * (-a).exp() * -(-x).exp_m1() / x
     } else {
-        (-tau1 / mu0).exp() * (tau1 * d).exp_m1() / (d * mu)
+        a * (-b).exp() * -x.exp_m1() / -x
     }
 }
 

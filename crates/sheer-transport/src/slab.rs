@@ -122,6 +122,13 @@ impl Discretisation {
         for i in (0..last).rev() {
             nodes.push(tau1 - nodes[i]);
         }
+        // A τ1 near the smallest `f64` leaves no room for cells (τ1/2 rounds to 0 at 5e-324), and a
+        // mesh with repeated nodes makes the collocation system singular.
+        if nodes.len() < 3 || nodes.windows(2).any(|pair| pair[0] >= pair[1]) {
+            return Err(TransportError::Discretisation(
+                "tau1 is too small for distinct mesh nodes",
+            ));
+        }
         Ok(nodes)
     }
 }
@@ -224,7 +231,11 @@ impl SlabSolver {
         for (&u, &w) in self.forcing_nodes.iter().zip(&self.forcing_weights) {
             // I1 = ∫_0^τ e^{−(τ−t)/u} e^{−t/μ0} dt = (e^{−τ/μ0} − e^{−τ/u}) / d, d = 1/u − 1/μ0.
             let d = 1.0 / u - 1.0 / mu0;
-            let from_above = if d == 0.0 {
+            // Empty integrals at the faces are 0, also where a cosine so small that 1/μ0 overflows
+            // would make them 0·∞.
+            let from_above = if tau == 0.0 {
+                0.0
+            } else if d == 0.0 {
                 tau * beam
             } else if d > 0.0 {
                 beam * -(-tau * d).exp_m1() / d
@@ -233,7 +244,11 @@ impl SlabSolver {
             };
             // I2 = ∫_τ^τ1 e^{−(t−τ)/u} e^{−t/μ0} dt = e^{−τ/μ0} (1 − e^{−(τ1−τ) c}) / c, c = 1/u + 1/μ0.
             let c = 1.0 / u + 1.0 / mu0;
-            let from_below = beam * -(-below * c).exp_m1() / c;
+            let from_below = if below == 0.0 {
+                0.0
+            } else {
+                beam * -(-below * c).exp_m1() / c
+            };
             // du/u = d(ln u): the Jacobian cancels the 1/u of the E1 representation.
             sum += w * (from_above + from_below);
         }

@@ -189,6 +189,46 @@ fn single_scattering_formulas_match_paper_equations() {
     assert!(((at_equal - limit) / limit).abs() < 1e-15 * 8.0);
 }
 
+/// Cosines so small that their reciprocals overflow (the validation admits every μ0 > 0) gave NaN:
+/// `1/μ0 − 1/μ` was ∞ − ∞, and the solver's face integrals 0·∞. They now take their limits, which the
+/// formulas' slant paths `τ1/μ` and `τ1/μ0` give exactly; a τ1 too small to mesh is an error.
+#[test]
+fn cosines_and_thicknesses_at_the_ends_of_f64_give_limits_or_errors_never_nan() {
+    let eq5 = |tau1, mu0, mu| single_scattered_transmitted_radiance(tau1, 0.5, mu0, mu).unwrap();
+    let tiny = 1e-310;
+    assert!(1.0 / tiny == f64::INFINITY);
+    // Both paths infinite: nothing gets through.
+    assert_eq!(eq5(1.0, tiny, tiny), 0.0);
+    assert_eq!(eq5(1.0, tiny, 0.5), 0.0);
+    // A grazing view: the limit μ → 0, e^{−τ1/μ0}.
+    assert_eq!(eq5(1.0, 0.5, tiny), eq5(1.0, 0.5, 0.0));
+    assert_eq!(eq5(1.0, 0.5, 0.0), 0.5 / (4.0 * PI) * (-2.0f64).exp());
+    // A subnormal thickness with subnormal cosines: equal paths, the limit Λ/(4π) τ1/μ e^{−τ1/μ}.
+    let path = 5e-324 / tiny;
+    let limit = 0.5 / (4.0 * PI) * path * (-path).exp();
+    assert!((eq5(5e-324, tiny, tiny) - limit).abs() <= 1e-15 * limit);
+    for (mu0, mu) in [(tiny, tiny), (tiny, 0.5), (0.5, tiny), (tiny, 0.0)] {
+        let r = single_scattered_reflected_radiance(1.0, 0.5, mu0, mu).unwrap();
+        assert!(r.is_finite() && r >= 0.0, "{mu0} {mu}: {r}");
+    }
+    // The solver: finite radiances and fluxes under a beam at a subnormal cosine.
+    let solution = SlabSolver::new(1.0, 0.5).unwrap().solve(tiny).unwrap();
+    for mu in [0.0, tiny, 0.3, 1.0] {
+        for value in [
+            solution.reflected_radiance(mu).unwrap(),
+            solution.transmitted_radiance(mu).unwrap(),
+        ] {
+            assert!(value.is_finite() && value >= 0.0, "{mu}: {value}");
+        }
+    }
+    assert!(solution.reflected_flux().is_finite() && solution.transmitted_flux().is_finite());
+    // τ1/2 rounds to 0: no mesh (this built a one-node mesh and then panicked).
+    assert!(matches!(
+        SlabSolver::new(5e-324, 0.5),
+        Err(TransportError::Discretisation(_))
+    ));
+}
+
 #[test]
 fn all_orders_tends_to_single_scattering_as_albedo_vanishes() {
     // The excess of all orders over single scattering, e(Λ) = (L − L₁)/L₁ = Σ_{n≥2} c_n Λ^{n−1} with
