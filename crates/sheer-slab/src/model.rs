@@ -196,7 +196,14 @@ pub fn point_light_beam_normal_irradiance(
     if !(distance.is_finite() && distance > 0.0) {
         return Err(SlabParameterError::Distance(distance));
     }
-    Ok(flux / (4.0 * PI * distance * distance))
+    // Divided step by step: r² of a tiny r underflows to 0 (0/0 for no flux), where Φ/(4π)/r/r does
+    // not; an irradiance beyond f64 (a strong light almost touching the surface) is refused.
+    let irradiance = flux / (4.0 * PI) / distance / distance;
+    if irradiance.is_finite() {
+        Ok(irradiance)
+    } else {
+        Err(SlabParameterError::Irradiance(irradiance))
+    }
 }
 
 /// Irradiance (W/m²) on the surface, eq. (6): `Φμ0/(4πr²)`.
@@ -384,6 +391,17 @@ mod tests {
         assert!(Cosine::new("mu0", 1.0 + 1e-15).is_err());
         assert!(point_light_beam_normal_irradiance(1.0, 0.0).is_err());
         assert!(point_light_beam_normal_irradiance(-1.0, 1.0).is_err());
+        // r² underflows at 1e-200 m: no light gave 0/0, a watt +∞; a flux near the largest f64 at
+        // 10 cm overflows. Now 0, and typed errors for the two beyond f64.
+        assert_eq!(point_light_beam_normal_irradiance(0.0, 1e-200), Ok(0.0));
+        for (flux, distance) in [(1.0, 1e-200), (f64::MAX, 0.1)] {
+            assert!(matches!(
+                point_light_beam_normal_irradiance(flux, distance),
+                Err(SlabParameterError::Irradiance(value)) if value == f64::INFINITY
+            ));
+        }
+        let at_a_metre = point_light_beam_normal_irradiance(4.0 * PI, 1.0).unwrap();
+        assert!((at_a_metre - 1.0).abs() <= f64::EPSILON);
     }
 
     #[test]

@@ -342,7 +342,7 @@ fn per_fragment_matches_cpu_model_pixel_by_pixel() {
                         .unwrap();
                     let eye = eye.as_dvec3();
                     let hit = |x: f64, y: f64| {
-                        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT);
+                        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
                         sheet.hit(origin, direction)
                     };
                     let (tau_f32, albedo_f32) = (f64::from(tau as f32), f64::from(albedo as f32));
@@ -419,7 +419,7 @@ fn background_image_is_composited_pixel_exactly() {
         .unwrap();
     let eye = camera.eye.as_dvec3();
     let hit = |x: f64, y: f64| {
-        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT);
+        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
         sheet.hit(origin, direction)
     };
     // The background varies per pixel, so compare only the slab's own contribution through α: the
@@ -580,7 +580,7 @@ fn overlapping_sheets_composite_back_to_front() {
         let eye = camera.eye.as_dvec3();
         let (tau, albedo) = (f64::from(tau as f32), f64::from(albedo as f32));
         let hits = |x: f64, y: f64| {
-            let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT);
+            let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
             (near.hit(origin, direction), far.hit(origin, direction))
         };
         let shade = |point: DVec3| {
@@ -812,7 +812,7 @@ fn per_channel_optical_thickness_blends_per_channel() {
     let image = result.unwrap();
     let eye = camera.eye.as_dvec3();
     let hit = |x: f64, y: f64| {
-        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT);
+        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
         sheet.hit(origin, direction)
     };
     let comparison = compare(
@@ -909,7 +909,7 @@ fn all_orders_per_fragment_matches_cpu_model_pixel_by_pixel() {
                     .unwrap();
                 let eye = eye.as_dvec3();
                 let hit = |x: f64, y: f64| {
-                    let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT);
+                    let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
                     sheet.hit(origin, direction)
                 };
                 let (tau_f32, albedo_f32) = (f64::from(tau as f32), f64::from(albedo as f32));
@@ -1346,7 +1346,7 @@ fn all_orders_per_channel_optical_thickness() {
         .unwrap();
     let eye = camera.eye.as_dvec3();
     let hit = |x: f64, y: f64| {
-        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT);
+        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
         sheet.hit(origin, direction)
     };
     let comparison = compare_with_slack(
@@ -1407,4 +1407,62 @@ fn all_orders_per_channel_optical_thickness() {
          worst {worst:e} (bound {bound:e})",
         comparison.worst_relative
     );
+}
+
+/// A light of enormous flux right at the sheet overflows the target's floats: that is a typed error
+/// naming the pixel, not an image with infinite or NaN pixels; and a camera that defines no view is
+/// refused before anything is drawn (it rendered only the background).
+#[test]
+fn overflowing_radiance_and_a_viewless_camera_are_typed_errors() {
+    let Some(mut renderer) = renderer(16, 16) else {
+        return;
+    };
+    let mesh =
+        SlabMesh::flat_sheet(Vec3::new(-0.5, -0.5, 0.0), Vec3::X, Vec3::Y, Vec3::Z, 2, 2).unwrap();
+    let view = camera(Vec3::new(0.0, 0.0, 2.0));
+    for path in [
+        EvaluationPath::PerFragment,
+        EvaluationPath::PerVertex,
+        EvaluationPath::Cpu,
+    ] {
+        let shading = ShadingParams::uniform(1.0, 0.9, Vec3::new(0.0, 0.0, 1e-3), 3e38).unwrap();
+        match renderer.render(
+            &mesh,
+            &view,
+            &shading,
+            &Background::Uniform([0.1, 0.1, 0.1]),
+            path,
+        ) {
+            Err(RenderError::NonFinitePixel { x, y, value, .. }) => {
+                assert!(x < 16 && y < 16 && !value.is_finite(), "{path:?}");
+            }
+            other => panic!("{path:?}: expected a non-finite pixel error, got {other:?}"),
+        }
+        // The same scene with an ordinary light renders, finite everywhere.
+        let shading = ShadingParams::uniform(1.0, 0.9, Vec3::new(0.0, 0.0, 1.0), 40.0).unwrap();
+        let image = renderer
+            .render(
+                &mesh,
+                &view,
+                &shading,
+                &Background::Uniform([0.1, 0.1, 0.1]),
+                path,
+            )
+            .unwrap();
+        assert!(image.pixels.iter().flatten().all(|c| c.is_finite()));
+        let mut viewless = view;
+        viewless.target = viewless.eye;
+        assert!(matches!(
+            renderer.render(
+                &mesh,
+                &viewless,
+                &shading,
+                &Background::Uniform([0.1, 0.1, 0.1]),
+                path,
+            ),
+            Err(RenderError::Camera(
+                sheer_slab::render::CameraError::EyeAtTarget(_)
+            ))
+        ));
+    }
 }

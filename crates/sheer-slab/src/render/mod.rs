@@ -37,8 +37,8 @@ pub use cpu::{
     sample_bilinear_red, slab_values_at, sort_back_to_front,
 };
 pub use scene::{
-    AllOrdersSampling, Background, Camera, LinearImage, MeshError, ShadingError, ShadingParams,
-    SlabMesh, Texture2d, linear_to_srgb, linear_to_srgb8, srgb8_to_linear,
+    AllOrdersSampling, Background, Camera, CameraError, LinearImage, MeshError, ShadingError,
+    ShadingParams, SlabMesh, Texture2d, linear_to_srgb, linear_to_srgb8, srgb8_to_linear,
 };
 
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};
@@ -157,6 +157,25 @@ pub enum RenderError {
     /// Bad mesh.
     #[error("invalid mesh: {0}")]
     Mesh(#[from] MeshError),
+    /// A camera that defines no view.
+    #[error("invalid camera: {0}")]
+    Camera(#[from] CameraError),
+    /// A pixel read back is NaN or infinite: the radiance overflowed the target's float format (a light
+    /// of enormous flux, or one almost touching the cloth). Reported rather than handed on.
+    #[error(
+        "pixel ({x}, {y}) came out {value} (the radiance overflows the {format:?} target): lower \
+         the light's flux or move it away from the cloth"
+    )]
+    NonFinitePixel {
+        /// Column.
+        x: u32,
+        /// Row from the top.
+        y: u32,
+        /// The first non-finite channel's value.
+        value: f32,
+        /// The render target's format.
+        format: TargetFormat,
+    },
     /// Bad shading parameters.
     #[error("invalid shading parameters: {0}")]
     Shading(#[from] ShadingError),
@@ -688,6 +707,7 @@ impl HeadlessRenderer {
         path: EvaluationPath,
     ) -> Result<std::time::Duration, RenderError> {
         mesh.validate()?;
+        camera.validate()?;
         shading.validate()?;
         let dual = !shading.grey_optical_thickness();
         if dual && !self.dual_source {
@@ -902,6 +922,19 @@ impl HeadlessRenderer {
                     }
                 }
             }
+        }
+        if let Some((index, value)) = pixels.iter().enumerate().find_map(|(i, pixel)| {
+            pixel
+                .iter()
+                .find(|channel| !channel.is_finite())
+                .map(|&value| (i, value))
+        }) {
+            return Err(RenderError::NonFinitePixel {
+                x: index as u32 % self.width,
+                y: index as u32 / self.width,
+                value,
+                format: self.target_format,
+            });
         }
         Ok(LinearImage {
             width: self.width,

@@ -168,7 +168,79 @@ pub struct Camera {
     pub far: f32,
 }
 
+/// Why a camera was rejected.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CameraError {
+    /// Eye, target and up must be finite.
+    #[error("camera {name} {value:?} is not finite")]
+    NonFinite {
+        /// `eye`, `target` or `up`.
+        name: &'static str,
+        /// The rejected vector.
+        value: [f32; 3],
+    },
+    /// The eye must not sit on the point it looks at (no view direction).
+    #[error("camera eye and target coincide at {0:?}")]
+    EyeAtTarget([f32; 3]),
+    /// `up` must be non-zero and not along the view direction (no roll would be defined).
+    #[error("camera up {0:?} is zero or parallel to the view direction")]
+    Up([f32; 3]),
+    /// The vertical field of view must lie in (0, π) radians.
+    #[error("camera vertical field of view {0} rad is outside (0, pi)")]
+    FieldOfView(f32),
+    /// The clip planes must satisfy 0 < near < far, both finite (m).
+    #[error("camera clip planes near = {near} m, far = {far} m: need 0 < near < far, both finite")]
+    ClipPlanes {
+        /// Near plane distance.
+        near: f32,
+        /// Far plane distance.
+        far: f32,
+    },
+    /// A pixel position must be finite.
+    #[error("pixel position ({x}, {y}) is not finite")]
+    PixelPosition {
+        /// Column, in pixels.
+        x: f64,
+        /// Row, in pixels.
+        y: f64,
+    },
+}
+
 impl Camera {
+    /// Checks that the camera defines a view: finite vectors, an eye apart from the target, an `up` not
+    /// along the view, a field of view in (0, π) and clip planes 0 < near < far. Otherwise its
+    /// view-projection holds NaN or infinities and a render would show only the background.
+    pub fn validate(&self) -> Result<(), CameraError> {
+        for (name, value) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
+            if !value.is_finite() {
+                return Err(CameraError::NonFinite {
+                    name,
+                    value: value.to_array(),
+                });
+            }
+        }
+        // In f64, as the view-projection is built.
+        let view = self.target.as_dvec3() - self.eye.as_dvec3();
+        if view == DVec3::ZERO {
+            return Err(CameraError::EyeAtTarget(self.eye.to_array()));
+        }
+        let up = self.up.as_dvec3();
+        let sine = up.cross(view).length() / (up.length() * view.length());
+        if sine.is_nan() || sine <= 1e-6 {
+            return Err(CameraError::Up(self.up.to_array()));
+        }
+        if !(self.vertical_fov > 0.0 && f64::from(self.vertical_fov) < std::f64::consts::PI) {
+            return Err(CameraError::FieldOfView(self.vertical_fov));
+        }
+        if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
+            return Err(CameraError::ClipPlanes {
+                near: self.near,
+                far: self.far,
+            });
+        }
+        Ok(())
+    }
+
     /// World → clip transform for an image of `width × height` pixels.
     pub fn view_projection(&self, width: u32, height: u32) -> Mat4 {
         self.view_projection_f64(width, height).as_mat4()
@@ -193,8 +265,19 @@ impl Camera {
 
     /// The ray (origin, unit direction) through the point `(x, y)` of the image in pixel units, (0, 0)
     /// being the top-left corner of the image (pixel centres are at half-integers), in `f64`: for reference
-    /// computations that must match the rasteriser's sample positions.
-    pub fn pixel_ray(&self, x: f64, y: f64, width: u32, height: u32) -> (DVec3, DVec3) {
+    /// computations that must match the rasteriser's sample positions. The camera must be valid
+    /// ([`validate`](Self::validate)) and the position finite.
+    pub fn pixel_ray(
+        &self,
+        x: f64,
+        y: f64,
+        width: u32,
+        height: u32,
+    ) -> Result<(DVec3, DVec3), CameraError> {
+        self.validate()?;
+        if !(x.is_finite() && y.is_finite()) {
+            return Err(CameraError::PixelPosition { x, y });
+        }
         let inverse = self.view_projection_f64(width, height).inverse();
         let ndc_x = 2.0 * x / f64::from(width) - 1.0;
         let ndc_y = 1.0 - 2.0 * y / f64::from(height);
@@ -203,7 +286,7 @@ impl Camera {
         let near = near.truncate() / near.w;
         let far = far.truncate() / far.w;
         let origin = self.eye.as_dvec3();
-        (origin, (far - near).normalize())
+        Ok((origin, (far - near).normalize()))
     }
 }
 
@@ -649,9 +732,65 @@ mod tests {
             near: 0.1,
             far: 10.0,
         };
-        let (origin, direction) = camera.pixel_ray(32.0, 16.0, 64, 32);
+        let (origin, direction) = camera.pixel_ray(32.0, 16.0, 64, 32).unwrap();
         assert!((origin - DVec3::new(0.0, 0.0, 3.0)).length() < 1e-12);
         // Round trip through an f64 4×4 inverse: ~1e-15 relative per entry.
         assert!((direction - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-12);
+    }
+
+    /// Each of these made a view-projection of NaN or infinities: a render of only the background and
+    /// NaN rays.
+    #[test]
+    fn cameras_that_define_no_view_are_typed_errors() {
+        let good = Camera {
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            vertical_fov: 0.8,
+            near: 0.1,
+            far: 10.0,
+        };
+        assert_eq!(good.validate(), Ok(()));
+        let bad = |f: &dyn Fn(&mut Camera)| {
+            let mut camera = good;
+            f(&mut camera);
+            let error = camera.validate().unwrap_err();
+            // By their text: NaN fields make equal errors compare unequal.
+            assert_eq!(
+                format!("{:?}", camera.pixel_ray(1.0, 1.0, 4, 4).unwrap_err()),
+                format!("{error:?}")
+            );
+            error
+        };
+        assert!(matches!(
+            bad(&|c| c.eye.x = f32::NAN),
+            CameraError::NonFinite { name: "eye", .. }
+        ));
+        assert!(matches!(
+            bad(&|c| c.up = Vec3::splat(f32::INFINITY)),
+            CameraError::NonFinite { name: "up", .. }
+        ));
+        assert!(matches!(
+            bad(&|c| c.target = c.eye),
+            CameraError::EyeAtTarget(_)
+        ));
+        assert!(matches!(bad(&|c| c.up = Vec3::ZERO), CameraError::Up(_)));
+        assert!(matches!(bad(&|c| c.up = -Vec3::Z), CameraError::Up(_)));
+        for fov in [0.0, -0.5, 3.2, f32::NAN] {
+            assert!(matches!(
+                bad(&|c| c.vertical_fov = fov),
+                CameraError::FieldOfView(_)
+            ));
+        }
+        for (near, far) in [(0.0, 10.0), (-1.0, 10.0), (5.0, 5.0), (1.0, f32::INFINITY)] {
+            assert!(matches!(
+                bad(&|c| (c.near, c.far) = (near, far)),
+                CameraError::ClipPlanes { .. }
+            ));
+        }
+        assert!(matches!(
+            good.pixel_ray(f64::NAN, 1.0, 4, 4),
+            Err(CameraError::PixelPosition { .. })
+        ));
     }
 }
