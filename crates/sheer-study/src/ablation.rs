@@ -74,7 +74,7 @@ fn sample_grid(positions: &[DVec3], spec: &GridSpec, u: f64, v: f64) -> DVec3 {
 }
 
 /// `positions` of grid `from` resampled at the particles of grid `to`.
-pub fn resample(positions: &[DVec3], from: &GridSpec, to: &GridSpec) -> Vec<DVec3> {
+pub(crate) fn resample(positions: &[DVec3], from: &GridSpec, to: &GridSpec) -> Vec<DVec3> {
     if from.columns == to.columns && from.rows == to.rows {
         return positions.to_vec();
     }
@@ -403,8 +403,8 @@ pub fn ablation(
             };
             let silhouette = match (own, expected_full) {
                 (Some(own), Some(full_snapshot)) => Some(silhouette_difference(
-                    &coverage(&own.positions, &triangles, &viewport),
-                    &coverage(&full_snapshot.positions, &full_triangles, &viewport),
+                    &coverage(&own.positions, &triangles, &viewport)?,
+                    &coverage(&full_snapshot.positions, &full_triangles, &viewport)?,
                 )),
                 _ => None,
             };

@@ -17,6 +17,7 @@
 
 use sheer_cloth::glam::DVec3;
 
+use crate::StudyError;
 use crate::silhouette::{Viewport, rasterise};
 
 /// Which frames a time-averaged coverage averages over, and the camera window.
@@ -76,27 +77,31 @@ pub struct CoverageAccumulator {
 }
 
 impl CoverageAccumulator {
-    pub fn new(viewport: Viewport) -> CoverageAccumulator {
+    /// An empty accumulator over a valid viewport ([`Viewport::validate`]).
+    pub fn new(viewport: Viewport) -> Result<CoverageAccumulator, StudyError> {
+        viewport.validate()?;
         let pixels = viewport.resolution * viewport.resolution;
-        CoverageAccumulator {
+        Ok(CoverageAccumulator {
             viewport,
             counts: vec![0; pixels],
             last_frame: vec![0; pixels],
             frames: 0,
-        }
+        })
     }
 
-    /// Adds one frame: the cloth at `positions` with `triangles`.
-    pub fn add(&mut self, positions: &[DVec3], triangles: &[[u32; 3]]) {
-        self.frames += 1;
-        let frame = self.frames;
+    /// Adds one frame: the cloth at `positions` with `triangles` (which must name existing positions;
+    /// a frame refused is not counted).
+    pub fn add(&mut self, positions: &[DVec3], triangles: &[[u32; 3]]) -> Result<(), StudyError> {
+        let frame = self.frames + 1;
         let (counts, last_frame) = (&mut self.counts, &mut self.last_frame);
         rasterise(positions, triangles, &self.viewport, |pixel| {
             if last_frame[pixel] != frame {
                 last_frame[pixel] = frame;
                 counts[pixel] += 1;
             }
-        });
+        })?;
+        self.frames = frame;
+        Ok(())
     }
 
     /// Frames added so far.
@@ -172,8 +177,8 @@ mod tests {
         let (q, _) = sheet(0.0, 0.0, 0.5, 0.5);
         p.extend(q);
         t.extend([[4, 5, 6], [4, 6, 7]]);
-        let mut accumulator = CoverageAccumulator::new(viewport());
-        accumulator.add(&p, &t);
+        let mut accumulator = CoverageAccumulator::new(viewport()).unwrap();
+        accumulator.add(&p, &t).unwrap();
         let mean = accumulator.finish().unwrap();
         assert!(mean.fractions.iter().all(|&f| f == 0.0 || f == 1.0));
         assert!(
@@ -190,9 +195,9 @@ mod tests {
         // [1, 1.25] in one (fraction ½): mean area = 0.5·(0.75 + ½·0.5) = 0.5 m², as every frame covers.
         let (a, t) = sheet(0.0, 0.0, 1.0, 0.5);
         let (b, _) = sheet(0.25, 0.0, 1.0, 0.5);
-        let mut accumulator = CoverageAccumulator::new(viewport());
-        accumulator.add(&a, &t);
-        accumulator.add(&b, &t);
+        let mut accumulator = CoverageAccumulator::new(viewport()).unwrap();
+        accumulator.add(&a, &t).unwrap();
+        accumulator.add(&b, &t).unwrap();
         let mean = accumulator.finish().unwrap();
         assert_eq!(mean.frames, 2);
         assert!(
@@ -209,9 +214,9 @@ mod tests {
     fn difference_of_shifted_still_sheets_is_twice_the_shift_over_the_width() {
         let (a, t) = sheet(0.0, 0.0, 1.0, 0.5);
         let mean = |p: &[DVec3]| {
-            let mut accumulator = CoverageAccumulator::new(viewport());
+            let mut accumulator = CoverageAccumulator::new(viewport()).unwrap();
             for _ in 0..3 {
-                accumulator.add(p, &t);
+                accumulator.add(p, &t).unwrap();
             }
             accumulator.finish().unwrap()
         };
@@ -226,12 +231,12 @@ mod tests {
         let d = coverage_difference(&mean(&c), &reference).unwrap();
         assert!((d - 2.0).abs() < 1e-12, "{d}");
         // Nothing to normalise by, or another camera: no value rather than NaN.
-        let empty = CoverageAccumulator::new(viewport());
+        let empty = CoverageAccumulator::new(viewport()).unwrap();
         assert!(empty.finish().is_none());
         let mut other = viewport();
         other.resolution = 200;
-        let mut elsewhere = CoverageAccumulator::new(other);
-        elsewhere.add(&a, &t);
+        let mut elsewhere = CoverageAccumulator::new(other).unwrap();
+        elsewhere.add(&a, &t).unwrap();
         assert_eq!(
             coverage_difference(&elsewhere.finish().unwrap(), &reference),
             None

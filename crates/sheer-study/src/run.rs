@@ -113,7 +113,9 @@ pub fn simulate(
         }
         None => None,
     };
-    let mut accumulator = window.map(|(_, _, viewport)| CoverageAccumulator::new(viewport));
+    let mut accumulator = window
+        .map(|(_, _, viewport)| CoverageAccumulator::new(viewport))
+        .transpose()?;
     let mut sim = scene.simulation(method)?;
     let triangles = sim.triangles().to_vec();
     let mut trajectory = Trajectory {
@@ -163,7 +165,7 @@ pub fn simulate(
                 next_sample += 1;
             }
             if cover_now && let Some(accumulator) = accumulator.as_mut() {
-                accumulator.add(sim.positions(), &triangles);
+                accumulator.add(sim.positions(), &triangles)?;
             }
             started = thread_cpu_seconds();
         }

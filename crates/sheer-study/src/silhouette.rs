@@ -5,7 +5,13 @@
 //! This is the coverage silhouette seen by an orthographic camera, not the output of the GPU renderer
 //! (which another crate provides); it measures how much of the picture's outline a model change moves.
 
+use sheer_cloth::ModelError;
 use sheer_cloth::glam::DVec3;
+
+use crate::StudyError;
+
+/// The most pixels a side: 16 384² coverage entries (256 Mi) is far beyond any study's need.
+pub const MAX_RESOLUTION: usize = 16_384;
 
 /// A square window of the x–y plane, m, rasterised at `resolution × resolution` pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,20 +34,63 @@ impl Viewport {
             resolution,
         }
     }
+
+    /// Checks that the window is a finite square of positive size, at 1 to [`MAX_RESOLUTION`] pixels a
+    /// side.
+    pub fn validate(&self) -> Result<(), StudyError> {
+        let invalid = |name, value, reason| StudyError::InvalidInput {
+            name,
+            value,
+            reason,
+        };
+        for (name, value) in [
+            ("viewport.min_x", self.min_x),
+            ("viewport.min_y", self.min_y),
+        ] {
+            if !value.is_finite() {
+                return Err(invalid(name, value, "must be finite (m)"));
+            }
+        }
+        if !(self.size.is_finite() && self.size > 0.0) {
+            return Err(invalid(
+                "viewport.size",
+                self.size,
+                "must be finite and > 0 (m)",
+            ));
+        }
+        if !(1..=MAX_RESOLUTION).contains(&self.resolution) {
+            return Err(invalid(
+                "viewport.resolution",
+                self.resolution as f64,
+                "must be 1 to 16384 pixels a side",
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Calls `visit(pixel)` for every pixel (row-major index) whose centre lies in a triangle of the
 /// cloth; a pixel covered by several triangles (a fold, a shared edge) is visited once per triangle.
+/// The viewport must be valid ([`Viewport::validate`]) and every triangle must name existing positions.
 pub fn rasterise(
     positions: &[DVec3],
     triangles: &[[u32; 3]],
     viewport: &Viewport,
     mut visit: impl FnMut(usize),
-) {
-    let n = viewport.resolution;
-    if n == 0 {
-        return;
+) -> Result<(), StudyError> {
+    viewport.validate()?;
+    let vertex_count = positions.len();
+    for (triangle, corners) in triangles.iter().enumerate() {
+        if let Some(&index) = corners.iter().find(|&&i| i as usize >= vertex_count) {
+            return Err(ModelError::IndexOutOfRange {
+                triangle,
+                index,
+                vertex_count,
+            }
+            .into());
+        }
     }
+    let n = viewport.resolution;
     let pixel = viewport.size / n as f64;
     for tri in triangles {
         let [a, b, c] = tri.map(|i| positions[i as usize]);
@@ -84,14 +133,20 @@ pub fn rasterise(
             }
         }
     }
+    Ok(())
 }
 
-/// Coverage mask, row-major, `resolution²` entries.
-pub fn coverage(positions: &[DVec3], triangles: &[[u32; 3]], viewport: &Viewport) -> Vec<bool> {
+/// Coverage mask, row-major, `resolution²` entries (inputs as for [`rasterise`]).
+pub fn coverage(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    viewport: &Viewport,
+) -> Result<Vec<bool>, StudyError> {
+    viewport.validate()?;
     let n = viewport.resolution;
     let mut mask = vec![false; n * n];
-    rasterise(positions, triangles, viewport, |pixel| mask[pixel] = true);
-    mask
+    rasterise(positions, triangles, viewport, |pixel| mask[pixel] = true)?;
+    Ok(mask)
 }
 
 /// `1 − IoU` of two coverage masks: 0 for identical silhouettes, 1 for disjoint ones, 0 when both
@@ -133,15 +188,59 @@ mod tests {
         };
         let (p, t) = square(0.0);
         let (q, _) = square(0.5);
-        let a = coverage(&p, &t, &viewport);
+        let a = coverage(&p, &t, &viewport).unwrap();
         assert_eq!(silhouette_difference(&a, &a), 0.0);
         // Unit square covers 1 m² = 2500 pixels of 2 cm; shifted by half: intersection 0.5, union 1.5,
         // 1 − IoU = 2/3. Pixel-centre sampling on a grid aligned with the square's edges is exact up
         // to edges that fall on pixel centres: one column of 50 pixels, 2 % of the union.
         let expected = 2.0 / 3.0;
-        let measured = silhouette_difference(&a, &coverage(&q, &t, &viewport));
+        let measured = silhouette_difference(&a, &coverage(&q, &t, &viewport).unwrap());
         assert!((measured - expected).abs() < 0.02, "{measured}");
         let covered = a.iter().filter(|&&c| c).count();
         assert!((covered as f64 - 2500.0).abs() <= 100.0, "{covered}");
+    }
+
+    /// A viewport of no size or of more pixels than memory holds, and a triangle naming a vertex that
+    /// is not there, are typed errors (they gave an empty coverage, overflowed `n²`, or panicked).
+    #[test]
+    fn bad_viewports_and_triangles_are_typed_errors() {
+        let (p, t) = square(0.0);
+        let good = Viewport {
+            min_x: -1.0,
+            min_y: -1.0,
+            size: 3.0,
+            resolution: 8,
+        };
+        assert!(coverage(&p, &t, &good).is_ok());
+        let refused = |viewport: Viewport| match coverage(&p, &t, &viewport) {
+            Err(StudyError::InvalidInput { name, .. }) => name,
+            other => panic!("expected an invalid input, got {other:?}"),
+        };
+        for size in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(refused(Viewport { size, ..good }), "viewport.size");
+        }
+        for resolution in [0, MAX_RESOLUTION + 1, 1 << 32] {
+            assert_eq!(
+                refused(Viewport { resolution, ..good }),
+                "viewport.resolution"
+            );
+        }
+        assert_eq!(
+            refused(Viewport {
+                min_x: f64::NAN,
+                ..good
+            }),
+            "viewport.min_x"
+        );
+        let mut bad_triangles = t.clone();
+        bad_triangles[1][2] = 4;
+        assert!(matches!(
+            coverage(&p, &bad_triangles, &good),
+            Err(StudyError::Model(ModelError::IndexOutOfRange {
+                triangle: 1,
+                index: 4,
+                vertex_count: 4
+            }))
+        ));
     }
 }

@@ -227,6 +227,56 @@ pub struct StabilitySetup {
     pub methods: Vec<Method>,
 }
 
+impl StabilitySetup {
+    /// Checks the setup: finite positive stiffnesses, steps no longer than the run, a finite positive
+    /// duration and error bound. (A NaN or negative step had become one step of the whole run, through
+    /// the rounding to a whole number of steps.) The grid is checked where its scene is built.
+    pub fn validate(&self) -> Result<(), StudyError> {
+        let invalid = |name, value, reason| StudyError::InvalidInput {
+            name,
+            value,
+            reason,
+        };
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            return Err(invalid(
+                "stability duration",
+                self.duration,
+                "must be finite and > 0 (s)",
+            ));
+        }
+        if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
+            return Err(invalid(
+                "stability error bound",
+                self.error_bound,
+                "must be finite and > 0 (m)",
+            ));
+        }
+        if let Some(&k) = self
+            .stiffnesses
+            .iter()
+            .find(|k| !(k.is_finite() && **k > 0.0))
+        {
+            return Err(invalid(
+                "stability stiffness",
+                k,
+                "must be finite and > 0 (N/m)",
+            ));
+        }
+        if let Some(&step) = self
+            .steps
+            .iter()
+            .find(|&&h| !(h.is_finite() && h > 0.0 && h <= self.duration))
+        {
+            return Err(invalid(
+                "stability step",
+                step,
+                "must be finite, > 0 and at most the run's duration (s)",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The map and the predictions.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilityMap {
@@ -260,14 +310,24 @@ pub fn map_methods() -> Vec<Method> {
     ]
 }
 
-/// `count` steps spaced evenly in `log dt` from `smallest` to `largest`, s.
-pub fn log_spaced(smallest: f64, largest: f64, count: usize) -> Vec<f64> {
-    if count < 2 {
-        return vec![smallest];
+/// `count` steps spaced evenly in `log dt` from `smallest` to `largest`, s: both finite and > 0 (a
+/// logarithmic spacing has no room for 0; it gave NaN steps).
+pub fn log_spaced(smallest: f64, largest: f64, count: usize) -> Result<Vec<f64>, StudyError> {
+    for (name, value) in [("smallest step", smallest), ("largest step", largest)] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(StudyError::InvalidInput {
+                name,
+                value,
+                reason: "must be finite and > 0 for a logarithmic spacing (s)",
+            });
+        }
     }
-    (0..count)
+    if count < 2 {
+        return Ok(vec![smallest]);
+    }
+    Ok((0..count)
         .map(|i| smallest * (largest / smallest).powf(i as f64 / (count - 1) as f64))
-        .collect()
+        .collect())
 }
 
 /// Runs every method at every (step, stiffness) of `setup` on [`Scene::undamped_sheet`] and classes
@@ -276,6 +336,7 @@ pub fn stability_map(
     setup: &StabilitySetup,
     monitor: &Monitor,
 ) -> Result<StabilityMap, StudyError> {
+    setup.validate()?;
     monitor.add_work((setup.methods.len() * setup.steps.len() * setup.stiffnesses.len()) as u64);
     let mut cells = Vec::new();
     let mut predictions = Vec::new();
@@ -333,4 +394,53 @@ pub fn stability_map(
         cells,
         predictions,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A NaN, negative or too long step, a stiffness or duration that is not a positive number, and a
+    /// logarithmic spacing from 0 are refused (a bad step silently became one step of the whole run;
+    /// the spacing gave NaN steps).
+    #[test]
+    fn bad_stability_setups_are_typed_errors() {
+        let good = StabilitySetup {
+            grid: (4, 3),
+            stiffnesses: vec![100.0],
+            steps: log_spaced(1e-4, 1e-2, 3).unwrap(),
+            duration: 0.1,
+            error_bound: 0.01,
+            methods: map_methods(),
+        };
+        assert_eq!(good.steps, vec![1e-4, 1e-4 * 10f64.powf(1.0), 1e-2]);
+        assert!(good.validate().is_ok());
+        let refused = |f: &dyn Fn(&mut StabilitySetup)| {
+            let mut setup = good.clone();
+            f(&mut setup);
+            match stability_map(&setup, &Monitor::hidden()) {
+                Err(StudyError::InvalidInput { name, .. }) => name,
+                other => panic!("expected an invalid input, got {:?}", other.err()),
+            }
+        };
+        for step in [f64::NAN, -1e-3, 0.0, 0.5] {
+            assert_eq!(refused(&|s| s.steps[1] = step), "stability step");
+        }
+        assert_eq!(
+            refused(&|s| s.stiffnesses = vec![f64::INFINITY]),
+            "stability stiffness"
+        );
+        assert_eq!(refused(&|s| s.duration = 0.0), "stability duration");
+        assert_eq!(
+            refused(&|s| s.error_bound = f64::NAN),
+            "stability error bound"
+        );
+        assert!(matches!(
+            log_spaced(0.0, 1.0, 4),
+            Err(StudyError::InvalidInput {
+                name: "smallest step",
+                ..
+            })
+        ));
+    }
 }

@@ -102,7 +102,8 @@ impl StudyConfig {
             },
             stability_grid: (16, 11),
             stability_stiffnesses: vec![1e2, 3e2, 1e3, 3e3, 1e4, 3e4, 1e5],
-            stability_steps: crate::stability::log_spaced(1e-5, 1.0 / 60.0, 12),
+            stability_steps: crate::stability::log_spaced(1e-5, 1.0 / 60.0, 12)
+                .expect("positive constants"),
             stability_duration: 1.0,
         }
     }
@@ -130,7 +131,8 @@ impl StudyConfig {
             },
             stability_grid: (8, 6),
             stability_stiffnesses: vec![1e2, 1e4],
-            stability_steps: crate::stability::log_spaced(1e-4, 1.0 / 60.0, 4),
+            stability_steps: crate::stability::log_spaced(1e-4, 1.0 / 60.0, 4)
+                .expect("positive constants"),
             stability_duration: 0.25,
         }
     }
