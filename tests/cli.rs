@@ -95,6 +95,9 @@ fn bench_sim_prints_the_thread_handoff_beside_two_thread_runs() {
         );
         stderr
     };
+    if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
+        return; // two threads are refused on one core
+    }
     let two = run("1,2");
     let line = two
         .lines()
@@ -190,6 +193,7 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
         &["bench", "sim", "--grid", "64by46"],
         &["bench", "sim", "--grid", "1x46"],
         &["bench", "sim", "--threads", "0"],
+        &["bench", "sim", "--threads", "1,100000"],
         &["bench", "sim", "--substeps", "0"],
         &["bench", "memory", "--mebibytes", "0"],
         &["bench", "memory", "--mebibytes", "-8"],

@@ -457,3 +457,62 @@ fn a_sequence_starts_at_its_time_and_its_first_frame_is_that_single_frame() {
         read_exr(&at_half.join("frame_0001.exr")).as_raw()
     );
 }
+
+/// Output that cannot be written is a one-line error with status 1: a small PNG to a full disk (whose
+/// last buffered bytes `image` had lost with their error, so `render` said `wrote`), an EXR there, and
+/// a benchmark's table to a full standard output (a panic before).
+#[test]
+fn output_that_cannot_be_written_is_a_one_line_error() {
+    let full = Path::new("/dev/full");
+    if !full.exists() {
+        return; // not Linux
+    }
+    let dir = scratch("full-disk");
+    let scene = dir.join("small.toml");
+    std::fs::write(
+        &scene,
+        "[flag]\ncolumns = 16\nrows = 11\n[render]\nwidth = 16\nheight = 16\nwarmup = 0.0\n",
+    )
+    .unwrap();
+    let one_line_error = |out: &Output, expected: &str| {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains(expected),
+            "{stderr}"
+        );
+    };
+    for name in ["full.png", "full.exr"] {
+        let link = dir.join(name);
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(full, &link).unwrap();
+        let out = sheer(&[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            link.to_str().unwrap(),
+        ]);
+        one_line_error(&out, "No space left on device");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_sheer"))
+        .args([
+            "bench",
+            "sim",
+            "--method",
+            "pbd",
+            "--grid",
+            "2x2",
+            "--threads",
+            "1",
+            "--seconds",
+            "0",
+            "--csv",
+        ])
+        .stdout(std::fs::File::create(full).unwrap())
+        .output()
+        .unwrap();
+    one_line_error(&out, "cannot write to standard output");
+    let _ = std::fs::remove_dir_all(&dir);
+}

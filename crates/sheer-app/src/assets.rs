@@ -962,12 +962,12 @@ pub fn write_assets(dir: &Path) -> Result<(), AssetError> {
 }
 
 fn save_png(image: &RgbImage, path: &Path) -> Result<(), AssetError> {
-    image
-        .save_with_format(path, image::ImageFormat::Png)
-        .map_err(|source| AssetError::Write {
+    sheer_slab::render::save_image_file(image, path, image::ImageFormat::Png).map_err(|source| {
+        AssetError::Write {
             path: path.to_path_buf(),
             source,
-        })
+        }
+    })
 }
 
 #[cfg(test)]

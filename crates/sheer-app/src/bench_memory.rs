@@ -12,8 +12,8 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 
-use crate::CliError;
 use crate::bench_sim::check_seconds;
+use crate::{CliError, outln};
 
 /// The most MiB the run may allocate in all (every streaming thread's buffer, or the hand-over's two):
 /// beyond it a typo would take the machine's memory.
@@ -310,15 +310,18 @@ pub fn run(args: &BenchMemoryArgs) -> Result<(), CliError> {
         } else {
             let _ = write!(line, "{case:<20} {threads:>7} {mebibytes:>10} {rate:>10.2}");
         }
-        println!("{line}");
+        outln!("{line}")
     };
     if args.csv {
-        println!("case,threads,mebibytes,gigabytes_per_s");
+        outln!("case,threads,mebibytes,gigabytes_per_s")?;
     } else {
-        println!(
+        outln!(
             "{:<20} {:>7} {:>10} {:>10}",
-            "case", "threads", "MiB each", "GB/s"
-        );
+            "case",
+            "threads",
+            "MiB each",
+            "GB/s"
+        )?;
     }
     let mut ratios = Vec::new();
     for stream in [Stream::Read, Stream::ReadWrite] {
@@ -335,7 +338,7 @@ pub fn run(args: &BenchMemoryArgs) -> Result<(), CliError> {
             .map(|&t| (t, stream_together(stream, t, elements, passes)))
             .collect();
         for &(t, rate) in &rates {
-            row(stream.name(), t, mebibytes, rate);
+            row(stream.name(), t, mebibytes, rate)?;
         }
         // Against one thread, when it was measured.
         if let (Some(&(1, one)), Some(&(many, rate))) = (rates.first(), rates.last())
@@ -347,9 +350,9 @@ pub fn run(args: &BenchMemoryArgs) -> Result<(), CliError> {
     if cores >= 2 {
         // Two threads take part: the writer and the reader.
         let found = handover(elements_in(cache_mebibytes), elements_in(EVICT_MEBIBYTES));
-        row("read_own_written", 2, cache_mebibytes, found.own);
-        row("read_other_written", 2, cache_mebibytes, found.other);
-        row("read_evicted", 2, cache_mebibytes, found.evicted);
+        row("read_own_written", 2, cache_mebibytes, found.own)?;
+        row("read_other_written", 2, cache_mebibytes, found.other)?;
+        row("read_evicted", 2, cache_mebibytes, found.evicted)?;
     } else {
         eprintln!("the hand-over case needs two cores; this machine shows one");
     }

@@ -10,9 +10,9 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 
-use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
 use crate::scene::{AllOrdersLookup, EvaluationPathName, Scattering, ShadingModel};
+use crate::{CliError, outln};
 
 #[derive(Debug, Args)]
 pub struct BenchRenderArgs {
@@ -162,12 +162,12 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         Some(0.5 * (ratios[(n - 1) / 2] + ratios[n / 2]))
     };
     if args.csv {
-        println!(
+        outln!(
             "path,width,height,fps,ratio_to_baseline,ratio_to_single,simulation_ms,normals_ms,shading_gpu_ms,readback_ms"
-        );
+        )?;
     } else {
-        println!("adapter: {}", renderer.adapter());
-        println!(
+        outln!("adapter: {}", renderer.adapter())?;
+        outln!(
             "{:<30} {:>9} {:>8} {:>9} {:>7} {:>14} {:>11} {:>13} {:>12}",
             "path",
             "size",
@@ -178,7 +178,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             "normals ms",
             "shading+GPU ms",
             "read-back ms"
-        );
+        )?;
     }
     for row in &rows {
         let fps = f64::from(row.frames) / row.total.as_secs_f64();
@@ -190,7 +190,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         );
         let single = against_single(row);
         if args.csv {
-            println!(
+            outln!(
                 "{},{w},{h},{fps:.2},{:.3},{},{:.3},{:.3},{:.3},{:.3}",
                 row.name,
                 baseline_fps / fps,
@@ -199,9 +199,9 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
                 values.1,
                 values.2,
                 values.3
-            );
+            )?;
         } else {
-            println!(
+            outln!(
                 "{:<30} {:>9} {:>8.1} {:>9.2} {:>7} {:>14.2} {:>11.2} {:>13.2} {:>12.2}",
                 row.name,
                 format!("{w}x{h}"),
@@ -212,14 +212,14 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
                 values.1,
                 values.2,
                 values.3
-            );
+            )?;
         }
     }
     if !args.csv {
-        println!(
+        outln!(
             "×baseline: frame time relative to the baseline's (cost ratio; 1.00 = as fast). ×single: \
              all orders against single scattering on the same path, median of per-round ratios."
-        );
+        )?;
     }
     Ok(())
 }

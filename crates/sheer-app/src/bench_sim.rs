@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use sheer_cloth::{ClothModel, GridSpec, Method, SimParams, Simulation};
 
-use crate::CliError;
 use crate::scene::{MAX_GRID_SIDE, MAX_ITERATIONS, MAX_SUBSTEPS};
+use crate::{CliError, outln};
 
 const FRAME: f64 = 1.0 / 60.0;
 
@@ -30,7 +30,7 @@ pub struct BenchSimArgs {
     /// methods have none (refused if no method measured has iterations).
     #[arg(long, allow_negative_numbers = true)]
     pub iterations: Option<u32>,
-    /// rayon thread counts to measure (comma-separated). Default: 1 and all cores. With more than one
+    /// rayon thread counts to measure (comma-separated), each at most the core count. Default: 1 and all cores. With more than one
     /// thread, the time one thread takes to see what another has written (`thread hand-off`, measured
     /// before and after the runs) goes to stderr: two-thread times grow with it.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
@@ -247,8 +247,12 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         args.threads.clone()
     };
     threads.dedup();
-    if threads.contains(&0) {
-        return Err(CliError::new("--threads must be ≥ 1"));
+    // More threads than cores would time their contention (a team's threads spin while they wait),
+    // not the solver; and a pool of 10⁵ threads took minutes to start.
+    if let Some(&bad) = threads.iter().find(|&&t| t == 0 || t > cores) {
+        return Err(CliError::new(format!(
+            "--threads must lie in [1, {cores}] (the cores), got {bad}"
+        )));
     }
     if let Some(interval) = args.wind_renewal_interval
         && !(interval.is_finite() && interval >= 0.0)
@@ -269,11 +273,11 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     let several_threads = threads.iter().any(|&t| t > 1);
     let handoff_before = several_threads.then(handoff);
     if args.csv {
-        println!(
+        outln!(
             "method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s"
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "{:<18} {:>11} {:>8} {:>10} {:>7} {:>12} {:>22}",
             "method",
             "grid",
@@ -282,7 +286,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
             "threads",
             "ms/frame",
             "particle-substeps/s"
-        );
+        )?;
     }
     for &(columns, rows) in &grids {
         for &method in &methods {
@@ -319,7 +323,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                             .map_or("diverged".into(), |v| format!("{v:.3e}"))
                     );
                 }
-                println!("{line}");
+                outln!("{line}")?;
             }
         }
     }

@@ -18,6 +18,18 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+/// `println!` that gives a [`CliError`] instead of panicking when standard output is closed or full
+/// (`sheer bench sim | head -1`, `> /dev/full`).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*).map_err(|e| {
+            $crate::CliError::new(format!("cannot write to standard output: {e}"))
+        })
+    }};
+}
+pub(crate) use outln;
+
 /// A one-line, user-facing error.
 #[derive(Debug)]
 pub struct CliError(String);

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
 use clap::{Args, ValueEnum};
 use image::{Rgb, RgbImage};
-use sheer_slab::render::LinearImage;
+use sheer_slab::render::{LinearImage, save_image_file};
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
@@ -198,9 +198,9 @@ pub const PANEL_NAMES: [&str; 4] = [
 /// Saves a linear image with its alpha (the transmittance) as RGBA OpenEXR.
 pub fn save_exr_rgba(image: &LinearImage, path: &Path) -> Result<(), CliError> {
     let data: Vec<f32> = image.pixels.iter().flatten().copied().collect();
-    image::Rgba32FImage::from_raw(image.width, image.height, data)
-        .ok_or_else(|| CliError::new("internal: image size mismatch"))?
-        .save(path)
+    let exr = image::Rgba32FImage::from_raw(image.width, image.height, data)
+        .ok_or_else(|| CliError::new("internal: image size mismatch"))?;
+    save_image_file(&exr, path, image::ImageFormat::OpenExr)
         .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))
 }
 
@@ -343,8 +343,7 @@ pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
         scene.shading.exposure,
         scene.shading.baseline_alpha,
     );
-    figure
-        .save(&args.out)
+    save_image_file(&figure, &args.out, image::ImageFormat::Png)
         .map_err(|e| CliError::new(format!("cannot write {}: {e}", args.out.display())))?;
     eprintln!("wrote {}", args.out.display());
     Ok(())

@@ -614,9 +614,9 @@ impl SheerApp {
             let result = image::RgbaImage::from_raw(w as u32, h as u32, bytes)
                 .ok_or_else(|| "screenshot has the wrong size".to_string())
                 .and_then(|img| {
-                    image::DynamicImage::ImageRgba8(img)
-                        .to_rgb8()
-                        .save(&path)
+                    let rgb = image::DynamicImage::ImageRgba8(img).to_rgb8();
+                    image::ImageFormat::from_path(&path)
+                        .and_then(|format| sheer_slab::render::save_image_file(&rgb, &path, format))
                         .map_err(|e| format!("cannot write {}: {e}", path.display()))
                 })
                 .map(|()| path);
@@ -705,7 +705,7 @@ pub fn run(options: WindowOptions) -> Result<(), CliError> {
         ..Default::default()
     };
     eframe::run_native("sheer", native, Box::new(|_| Ok(Box::new(app))))
-        .map_err(|e| CliError::new(format!("window: {e}")))?;
+        .map_err(|e| CliError::new(format!("window: {}", window_error_reason(&e.to_string()))))?;
     match failure.lock().ok().and_then(|mut f| f.take()) {
         Some(message) => Err(CliError::new(message)),
         None => Ok(()),
@@ -848,5 +848,46 @@ mod panel_tests {
         };
         assert_eq!(with_knob(xpbd, MethodKnob::PbdStiffness(0.5)), xpbd);
         assert_eq!(with_knob(xpbd, MethodKnob::CgTolerance(1e-3)), xpbd);
+    }
+}
+
+/// The reason in a window error, without the place in winit's source that winit's OS errors name
+/// (`os error at /root/.cargo/registry/…/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor
+/// WAYLAND_SOCKET nor DISPLAY is set`), and with the remedy when there is no display.
+fn window_error_reason(message: &str) -> String {
+    const MARK: &str = "os error at ";
+    let mut reason = message.to_string();
+    if let Some(start) = message.find(MARK) {
+        let rest = &message[start + MARK.len()..];
+        if let Some(end) = rest.find(".rs:") {
+            let after = &rest[end + ".rs:".len()..];
+            let digits = after.chars().take_while(char::is_ascii_digit).count();
+            if let Some(tail) = after[digits..].strip_prefix(": ") {
+                reason = format!("{}{tail}", &message[..start]);
+            }
+        }
+    }
+    if reason.contains("DISPLAY") {
+        reason.push_str(" (no display: run it under `xvfb-run -a`)");
+    }
+    reason
+}
+
+#[cfg(test)]
+mod window_error_tests {
+    use super::window_error_reason;
+
+    #[test]
+    fn a_window_error_gives_the_reason_without_winits_source_path() {
+        assert_eq!(
+            window_error_reason(
+                "winit EventLoopError: os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/\
+                 winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor \
+                 WAYLAND_SOCKET nor DISPLAY is set."
+            ),
+            "winit EventLoopError: neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set. \
+             (no display: run it under `xvfb-run -a`)"
+        );
+        assert_eq!(window_error_reason("wgpu: no adapter"), "wgpu: no adapter");
     }
 }

@@ -618,16 +618,35 @@ impl LinearImage {
         bytes
     }
 
-    /// Writes the sRGB rendering (see [`Self::to_srgb8`]) as a PNG.
+    /// Writes the sRGB rendering (see [`Self::to_srgb8`]) as a PNG ([`save_image_file`]).
     pub fn save_png(&self, path: &Path, exposure: f32) -> Result<(), image::ImageError> {
-        image::save_buffer(
-            path,
-            &self.to_srgb8(exposure),
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgba8,
-        )
+        let image = image::RgbaImage::from_raw(self.width, self.height, self.to_srgb8(exposure))
+            .ok_or_else(|| {
+                image::ImageError::Parameter(image::error::ParameterError::from_kind(
+                    image::error::ParameterErrorKind::DimensionMismatch,
+                ))
+            })?;
+        save_image_file(&image, path, image::ImageFormat::Png)
     }
+}
+
+/// Writes `image` to `path` in `format`, so that every write error reaches the caller: it is encoded
+/// in memory and written with one [`std::fs::write`]. `image`'s own `save` writes through a buffer
+/// whose last flush error is lost when the buffer is dropped: a PNG of a few KiB "written" to a full
+/// disk (`/dev/full`) returned `Ok`.
+pub fn save_image_file<P, Container>(
+    image: &image::ImageBuffer<P, Container>,
+    path: &Path,
+    format: image::ImageFormat,
+) -> Result<(), image::ImageError>
+where
+    P: image::Pixel + image::PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+    Container: std::ops::Deref<Target = [P::Subpixel]>,
+{
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut bytes, format)?;
+    std::fs::write(path, bytes.into_inner()).map_err(image::ImageError::IoError)
 }
 
 /// The inverse sRGB transfer function (IEC 61966-2-1): an 8-bit sRGB value to linear [0, 1], e.g. for
