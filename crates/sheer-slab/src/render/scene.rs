@@ -741,16 +741,21 @@ mod tests {
         assert!(ShadingParams::uniform(1.0, 0.5, Vec3::Z, -1.0).is_err());
     }
 
-    #[test]
-    fn pixel_ray_hits_the_target_at_the_centre() {
-        let camera = Camera {
+    /// A camera 3 m up the z axis looking at the origin.
+    fn camera_on_the_z_axis() -> Camera {
+        Camera {
             eye: Vec3::new(0.0, 0.0, 3.0),
             target: Vec3::ZERO,
             up: Vec3::Y,
             vertical_fov: 0.8,
             near: 0.1,
             far: 10.0,
-        };
+        }
+    }
+
+    #[test]
+    fn pixel_ray_hits_the_target_at_the_centre() {
+        let camera = camera_on_the_z_axis();
         let (origin, direction) = camera.pixel_ray(32.0, 16.0, 64, 32).unwrap();
         assert!((origin - DVec3::new(0.0, 0.0, 3.0)).length() < 1e-12);
         // Round trip through an f64 4×4 inverse: ~1e-15 relative per entry.
@@ -761,14 +766,7 @@ mod tests {
     /// NaN rays.
     #[test]
     fn cameras_that_define_no_view_are_typed_errors() {
-        let good = Camera {
-            eye: Vec3::new(0.0, 0.0, 3.0),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            vertical_fov: 0.8,
-            near: 0.1,
-            far: 10.0,
-        };
+        let good = camera_on_the_z_axis();
         assert_eq!(good.validate(), Ok(()));
         let bad = |f: &dyn Fn(&mut Camera)| {
             let mut camera = good;
