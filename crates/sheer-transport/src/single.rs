@@ -43,14 +43,15 @@ pub(crate) fn transmitted_path_factor(tau1: f64, mu0: f64, mu: f64) -> f64 {
     if b == f64::INFINITY {
         return 0.0;
     }
-    // x = b − a = τ1 (1/μ0 − 1/μ); the integral is a e^{−a} (1 − e^{−x}) / x.
+    // x = b − a = τ1 (1/μ0 − 1/μ); the integral is a e^{−a} (1 − e^{−x}) / x. The ratio, in (0, 1], is
+    // formed first: a·x underflows for a thin slab (τ1 = 1e-200 gave 0).
     let x = b - a;
     if x == 0.0 {
         a * (-a).exp()
     } else if x > 0.0 {
-        a * (-a).exp() * -(-x).exp_m1() / x
+        a * (-a).exp() * (-(-x).exp_m1() / x)
     } else {
-        a * (-b).exp() * -x.exp_m1() / -x
+        a * (-b).exp() * (x.exp_m1() / x)
     }
 }
 

@@ -126,7 +126,8 @@ impl Discretisation {
         // mesh with repeated nodes makes the collocation system singular.
         if nodes.len() < 3 || nodes.windows(2).any(|pair| pair[0] >= pair[1]) {
             return Err(TransportError::Discretisation(
-                "tau1 is too small for distinct mesh nodes",
+                "the mesh's nodes are not distinct at this tau1 (tau1 too small, or first_cell too \
+                 fine against it)",
             ));
         }
         Ok(nodes)

@@ -207,6 +207,15 @@ fn cosines_and_thicknesses_at_the_ends_of_f64_give_limits_or_errors_never_nan() 
     let path = 5e-324 / tiny;
     let limit = 0.5 / (4.0 * PI) * path * (-path).exp();
     assert!((eq5(5e-324, tiny, tiny) - limit).abs() <= 1e-15 * limit);
+    // A slab so thin that τ1 times the paths' difference underflows: eq. (5) tends to Λ/(4π) τ1/μ.
+    for (mu0, mu) in [(0.5, 1.0), (1.0, 0.5)] {
+        let thin = eq5(1e-200, mu0, mu);
+        let expected = 0.5 / (4.0 * PI) * 1e-200 / mu;
+        assert!(
+            (thin - expected).abs() <= 1e-15 * expected,
+            "{mu0} {mu}: {thin}"
+        );
+    }
     for (mu0, mu) in [(tiny, tiny), (tiny, 0.5), (0.5, tiny), (tiny, 0.0)] {
         let r = single_scattered_reflected_radiance(1.0, 0.5, mu0, mu).unwrap();
         assert!(r.is_finite() && r >= 0.0, "{mu0} {mu}: {r}");

@@ -204,6 +204,14 @@ pub enum CameraError {
         /// Row, in pixels.
         y: f64,
     },
+    /// An image needs at least one pixel each way.
+    #[error("image size {width}x{height} has no pixels")]
+    ImageSize {
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
 }
 
 impl Camera {
@@ -229,7 +237,12 @@ impl Camera {
         if sine.is_nan() || sine <= 1e-6 {
             return Err(CameraError::Up(self.up.to_array()));
         }
-        if !(self.vertical_fov > 0.0 && f64::from(self.vertical_fov) < std::f64::consts::PI) {
+        // The projection's focal term 1/tan(fov/2) must fit the f32 matrix the GPU gets.
+        let focal = 1.0 / (0.5 * f64::from(self.vertical_fov)).tan();
+        if !(self.vertical_fov > 0.0
+            && f64::from(self.vertical_fov) < std::f64::consts::PI
+            && (focal as f32).is_finite())
+        {
             return Err(CameraError::FieldOfView(self.vertical_fov));
         }
         if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
@@ -277,6 +290,9 @@ impl Camera {
         self.validate()?;
         if !(x.is_finite() && y.is_finite()) {
             return Err(CameraError::PixelPosition { x, y });
+        }
+        if width == 0 || height == 0 {
+            return Err(CameraError::ImageSize { width, height });
         }
         let inverse = self.view_projection_f64(width, height).inverse();
         let ndc_x = 2.0 * x / f64::from(width) - 1.0;
@@ -793,7 +809,8 @@ mod tests {
         ));
         assert!(matches!(bad(&|c| c.up = Vec3::ZERO), CameraError::Up(_)));
         assert!(matches!(bad(&|c| c.up = -Vec3::Z), CameraError::Up(_)));
-        for fov in [0.0, -0.5, 3.2, f32::NAN] {
+        // 1e-39 rad: 1/tan(fov/2) beyond f32.
+        for fov in [0.0, -0.5, 3.2, f32::NAN, 1e-39] {
             assert!(matches!(
                 bad(&|c| c.vertical_fov = fov),
                 CameraError::FieldOfView(_)
@@ -808,6 +825,13 @@ mod tests {
         assert!(matches!(
             good.pixel_ray(f64::NAN, 1.0, 4, 4),
             Err(CameraError::PixelPosition { .. })
+        ));
+        assert!(matches!(
+            good.pixel_ray(1.0, 1.0, 0, 4),
+            Err(CameraError::ImageSize {
+                width: 0,
+                height: 4
+            })
         ));
     }
 }
