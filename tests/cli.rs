@@ -118,6 +118,15 @@ fn bench_sim_prints_the_thread_handoff_beside_two_thread_runs() {
         assert!(measured || figure == "—", "{figure:?} in {line:?}");
     }
     assert!(!run("1").contains("hand-off"));
+    // 16 × 11 lies below the library's threshold, so its two-thread row ran on one thread: said so.
+    assert!(
+        two.contains(
+            "note: 16x11 (176 particles) ran on one thread at --threads 2: below \
+             parallel_min_particles, 16384"
+        ),
+        "{two}"
+    );
+    assert!(!run("1").contains("note:"));
 }
 
 #[test]

@@ -327,6 +327,20 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
             }
         }
     }
+    // A grid below the threshold steps on one thread whatever the pool: say so, or its two-thread row
+    // reads as a two-thread time.
+    let threshold = overrides
+        .parallel_min_particles
+        .unwrap_or(SimParams::waving_flag().parallel_min_particles);
+    if let Some(&most) = threads.iter().max().filter(|&&t| t > 1) {
+        for &(columns, rows) in grids.iter().filter(|(c, r)| c * r < threshold) {
+            eprintln!(
+                "note: {columns}x{rows} ({} particles) ran on one thread at --threads {most}: below \
+                 parallel_min_particles, {threshold} (--parallel-min-particles 0 runs it on the team)",
+                columns * rows
+            );
+        }
+    }
     if let Some(before) = handoff_before {
         // `—`: not measured (one CPU, or two threads that could not run at once).
         let text = |latency: Option<Duration>| {
