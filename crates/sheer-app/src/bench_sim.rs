@@ -30,9 +30,10 @@ pub struct BenchSimArgs {
     /// methods have none (refused if no method measured has iterations).
     #[arg(long, allow_negative_numbers = true)]
     pub iterations: Option<u32>,
-    /// rayon thread counts to measure (comma-separated), each at most the core count. Default: 1 and all cores. With more than one
-    /// thread, the time one thread takes to see what another has written (`thread hand-off`, measured
-    /// before and after the runs) goes to stderr: two-thread times grow with it.
+    /// rayon thread counts to measure (comma-separated), each at most the core count. Default: 1 and
+    /// all cores. With more than one thread, the time one thread takes to see what another has written
+    /// (`thread hand-off`, measured before and after the runs) goes to stderr: two-thread times grow
+    /// with it.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub threads: Vec<usize>,
     /// Particle count from which passes run on rayon's pool (default: the library's measured threshold;
