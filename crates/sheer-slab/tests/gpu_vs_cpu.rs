@@ -244,7 +244,7 @@ fn compare_with_slack(
                     (n, a)
                 })
                 .collect();
-            let got = image.pixel(x, y);
+            let got = image.pixel(x, y).unwrap();
             for channel in 0..4 {
                 let value = if channel < 3 { rgb[channel] } else { alpha };
                 let spread = neighbours
@@ -437,7 +437,7 @@ fn background_image_is_composited_pixel_exactly() {
                 continue;
             }
             let bg = texel(x, y).map(|c| f64::from(c as f32));
-            let got = image.pixel(x, y);
+            let got = image.pixel(x, y).unwrap();
             let (expected, tolerance) = match hit(cx, cy) {
                 None => (bg, [0.0; 3]),
                 Some(point) => {

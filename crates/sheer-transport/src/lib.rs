@@ -87,6 +87,17 @@ pub enum TransportError {
     /// Monte Carlo photon count must be positive.
     #[error("photon count must be > 0")]
     PhotonCount,
+    /// Monte Carlo μ bins per face: 1 to [`monte_carlo::MAX_BINS`].
+    #[error("bins per face must lie in [1, {max}], got {0}", max = monte_carlo::MAX_BINS)]
+    Bins(usize),
+    /// A tally count cannot exceed the photons launched.
+    #[error("a count of {count} photons exceeds the {photons} launched")]
+    Count {
+        /// The count asked about.
+        count: u64,
+        /// Photons launched.
+        photons: u64,
+    },
     /// Reading or writing a table file failed.
     #[error("table i/o: {0}")]
     Io(#[from] std::io::Error),

@@ -92,15 +92,26 @@ impl MonteCarloTally {
         (index as f64 / n, (index + 1) as f64 / n)
     }
 
-    /// Estimated flux and its standard error for `count` photons (per unit normal irradiance).
-    pub fn flux_with_error(&self, count: u64) -> (f64, f64) {
+    /// Estimated flux and its standard error for `count` of the photons (per unit normal irradiance);
+    /// a count beyond the photons launched is an error (its variance would be negative: NaN).
+    pub fn flux_with_error(&self, count: u64) -> Result<(f64, f64)> {
+        if count > self.photons {
+            return Err(TransportError::Count {
+                count,
+                photons: self.photons,
+            });
+        }
         let p = count as f64 / self.photons as f64;
-        (
+        Ok((
             self.mu0 * p,
             self.mu0 * (p * (1.0 - p) / self.photons as f64).sqrt(),
-        )
+        ))
     }
 }
+
+/// Most μ bins per face: far finer than any photon count resolves, and small enough that the tallies
+/// (two counters a bin per batch) never fail to allocate (`usize::MAX` bins panicked).
+pub const MAX_BINS: usize = 1 << 20;
 
 /// Launches `photons` photons at `mu0` ∈ (0, 1] into a slab of optical thickness `tau1` and albedo Λ,
 /// tallying emergent scattered photons into `bins` uniform μ bins per face. Deterministic in `seed`.
@@ -115,8 +126,11 @@ pub fn simulate_photons(
     validate::optical_thickness(tau1)?;
     validate::albedo(albedo)?;
     validate::incident_cosine(mu0)?;
-    if photons == 0 || bins == 0 {
+    if photons == 0 {
         return Err(TransportError::PhotonCount);
+    }
+    if !(1..=MAX_BINS).contains(&bins) {
+        return Err(TransportError::Bins(bins));
     }
     let batches = photons.div_ceil(BATCH);
     let partial: Vec<MonteCarloTally> = (0..batches)

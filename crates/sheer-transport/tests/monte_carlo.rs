@@ -49,7 +49,7 @@ fn monte_carlo_binned_fluxes_agree_with_solver() {
                 (true, tally.reflected[bin]),
                 (false, tally.transmitted[bin]),
             ] {
-                let (estimate, error) = tally.flux_with_error(count);
+                let (estimate, error) = tally.flux_with_error(count).unwrap();
                 let exact = solution.flux_between(low, high, reflected).unwrap();
                 assert!(
                     (estimate - exact).abs() < 4.0 * error,
@@ -65,9 +65,9 @@ fn monte_carlo_binned_fluxes_agree_with_solver() {
             single_scattering_rejected,
             "case {case} cannot tell orders apart"
         );
-        let (direct, error) = tally.flux_with_error(tally.direct);
+        let (direct, error) = tally.flux_with_error(tally.direct).unwrap();
         assert!((direct - solution.direct_transmitted_flux()).abs() < 4.0 * error);
-        let (absorbed, error) = tally.flux_with_error(tally.absorbed);
+        let (absorbed, error) = tally.flux_with_error(tally.absorbed).unwrap();
         assert!((absorbed - solution.absorbed_flux()).abs() < 4.0 * error.max(1e-12));
     }
 }
@@ -94,4 +94,21 @@ fn monte_carlo_rejects_bad_input() {
         simulate_photons(-1.0, 0.8, 0.5, 10, 8, 1),
         Err(TransportError::OpticalThickness(_))
     ));
+    // No bins, or so many that the tallies cannot be allocated ("capacity overflow" before).
+    for bins in [0, sheer_transport::monte_carlo::MAX_BINS + 1, usize::MAX] {
+        assert!(matches!(
+            simulate_photons(1.0, 0.8, 0.5, 10, bins, 1),
+            Err(TransportError::Bins(b)) if b == bins
+        ));
+    }
+    // A count beyond the photons launched has no flux (its variance came out negative: NaN).
+    let tally = simulate_photons(1.0, 0.8, 0.5, 10, 8, 1).unwrap();
+    assert!(matches!(
+        tally.flux_with_error(11),
+        Err(TransportError::Count {
+            count: 11,
+            photons: 10
+        })
+    ));
+    assert!(tally.flux_with_error(10).is_ok());
 }

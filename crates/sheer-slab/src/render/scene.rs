@@ -617,9 +617,14 @@ pub struct LinearImage {
 }
 
 impl LinearImage {
-    /// The pixel at column `x`, row `y` (from the top).
-    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
-        self.pixels[(y * self.width + x) as usize]
+    /// The pixel at column `x`, row `y` (from the top); `None` outside the image.
+    pub fn pixel(&self, x: u32, y: u32) -> Option<[f32; 4]> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        self.pixels
+            .get(y as usize * self.width as usize + x as usize)
+            .copied()
     }
 
     /// 8-bit sRGB RGBA (alpha 255) of `radiance × exposure`, clamped to [0, 1] for display only.
@@ -767,6 +772,22 @@ mod tests {
             near: 0.1,
             far: 10.0,
         }
+    }
+
+    /// Outside the image there is no pixel (a row past the end panicked, a column past it gave the
+    /// next row's pixel).
+    #[test]
+    fn a_pixel_outside_the_image_is_none() {
+        let image = LinearImage {
+            width: 3,
+            height: 2,
+            pixels: (0..6).map(|i| [i as f32; 4]).collect(),
+        };
+        assert_eq!(image.pixel(2, 1), Some([5.0; 4]));
+        assert_eq!(image.pixel(0, 1), Some([3.0; 4]));
+        assert_eq!(image.pixel(3, 0), None);
+        assert_eq!(image.pixel(0, 2), None);
+        assert_eq!(image.pixel(u32::MAX, u32::MAX), None);
     }
 
     #[test]
