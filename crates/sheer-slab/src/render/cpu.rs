@@ -207,11 +207,14 @@ pub fn sample_bilinear(texture: &Texture2d, uv: [f32; 2], channels: usize) -> [f
     let y = f64::from(uv[1]) * height as f64 - 0.5;
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
+    // Far outside [0, 1] the casts saturate; the neighbours must not overflow (clamped to the edge
+    // anyway).
     let (x0, y0) = (x0 as isize, y0 as isize);
+    let (x1, y1) = (x0.saturating_add(1), y0.saturating_add(1));
     let mut result = [0.0; 4];
     for (channel, value) in result.iter_mut().enumerate().take(channels.min(4)) {
-        let top = fetch(x0, y0, channel) * (1.0 - fx) + fetch(x0 + 1, y0, channel) * fx;
-        let bottom = fetch(x0, y0 + 1, channel) * (1.0 - fx) + fetch(x0 + 1, y0 + 1, channel) * fx;
+        let top = fetch(x0, y0, channel) * (1.0 - fx) + fetch(x1, y0, channel) * fx;
+        let bottom = fetch(x0, y1, channel) * (1.0 - fx) + fetch(x1, y1, channel) * fx;
         *value = top * (1.0 - fy) + bottom * fy;
     }
     result
@@ -294,6 +297,19 @@ mod tests {
         for v in [0.1f32, 0.3, 0.7, 3.7, 1234.5] {
             assert!((quantize_to_half(v) - v).abs() <= v * 2f32.powi(-11));
         }
+    }
+
+    /// Far outside [0, 1] a coordinate clamps to the edge texel. Its neighbour's index overflowed,
+    /// which panicked in a debug build (`cargo test` without `--release` catches a return of that); in a
+    /// release build it wrapped to the opposite edge, with weight 0 (a saturated coordinate has no
+    /// fraction), so the value was right.
+    #[test]
+    fn far_out_texture_coordinates_clamp_to_the_edge() {
+        let texture =
+            Texture2d::new(2, 1, vec![[0.25, 0.0, 0.0, 1.0], [0.75, 0.0, 0.0, 1.0]]).unwrap();
+        assert_eq!(sample_bilinear_red(&texture, [1e30, 0.5]), 0.75);
+        assert_eq!(sample_bilinear_red(&texture, [-1e30, 0.5]), 0.25);
+        assert_eq!(sample_bilinear_red(&texture, [f32::MAX, f32::MAX]), 0.75);
     }
 
     #[test]
