@@ -342,3 +342,26 @@ fn a_study_into_a_folder_it_cannot_write_is_refused_before_it_runs() {
         );
     }
 }
+
+#[test]
+fn an_output_that_cannot_be_written_is_refused_before_the_scene_is_simulated() {
+    // An hour of simulated flag takes far longer than the deadline: each of these ran it all before
+    // failing (`.jpg` is no type `render` writes), or said "File exists" of a file given as a folder.
+    let dir = scratch("outputs");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let file = file.to_str().unwrap();
+    assert_one_line_error(
+        &["render", "--time", "3600", "--out", "frame.jpg"],
+        1,
+        &["frame.jpg", "unknown image type (use .png or .exr)"],
+    );
+    for args in [
+        &["render", "--time", "3600", "--out-dir", file][..],
+        &["simulate", "--frames", "216000", "--out-dir", file],
+        &["assets", "--out", file],
+    ] {
+        assert_one_line_error(args, 1, &[file, "it is a file"]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -30,6 +30,19 @@ macro_rules! outln {
 }
 pub(crate) use outln;
 
+/// Creates the output folder `dir` (and its parents). A file already there is named as such: the
+/// system's own message for it, "File exists", reads as if the folder were the problem.
+pub fn create_output_dir(dir: &std::path::Path) -> Result<(), CliError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(CliError::new(format!(
+            "cannot use {} as the output folder: it is a file",
+            dir.display()
+        )));
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))
+}
+
 /// A one-line, user-facing error.
 #[derive(Debug)]
 pub struct CliError(String);
@@ -200,11 +213,9 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_cmd::run_render(args),
         Some(Command::Figure2(args)) => render_cmd::run_figure2(args),
         Some(Command::Slab(args)) => slab_cmd::run(args),
-        Some(Command::Assets(args)) => std::fs::create_dir_all(&args.out)
-            .map_err(|e| CliError::new(format!("cannot create {}: {e}", args.out.display())))
-            .and_then(|()| {
-                assets::write_assets(&args.out).map_err(|e| CliError::new(e.to_string()))
-            }),
+        Some(Command::Assets(args)) => create_output_dir(&args.out).and_then(|()| {
+            assets::write_assets(&args.out).map_err(|e| CliError::new(e.to_string()))
+        }),
         Some(Command::Simulate(args)) => simulate::run(args),
         Some(Command::Study(args)) => {
             sheer_study::run(args).map_err(|e| CliError::new(e.to_string()))

@@ -70,23 +70,37 @@ pub fn check_time(time: f64) -> Result<f32, CliError> {
     }
 }
 
-/// Saves a linear image as PNG (exposure, sRGB) or OpenEXR (linear float), by extension.
-pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(), CliError> {
+/// The image types `save_image` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageKind {
+    Png,
+    Exr,
+}
+
+/// The type of image `path` names by its extension (any case): `.png` or `.exr`.
+pub fn image_kind(path: &Path) -> Result<ImageKind, CliError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let result = match extension.as_deref() {
-        Some("png") => image.save_png(path, exposure),
-        Some("exr") => return save_exr_rgba(image, path),
-        _ => {
-            return Err(CliError::new(format!(
-                "{}: unknown image type (use .png or .exr)",
-                path.display()
-            )));
-        }
-    };
-    result.map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))
+    match extension.as_deref() {
+        Some("png") => Ok(ImageKind::Png),
+        Some("exr") => Ok(ImageKind::Exr),
+        _ => Err(CliError::new(format!(
+            "{}: unknown image type (use .png or .exr)",
+            path.display()
+        ))),
+    }
+}
+
+/// Saves a linear image as PNG (exposure, sRGB) or OpenEXR (linear float), by extension.
+pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(), CliError> {
+    match image_kind(path)? {
+        ImageKind::Png => image
+            .save_png(path, exposure)
+            .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display()))),
+        ImageKind::Exr => save_exr_rgba(image, path),
+    }
 }
 
 /// Whether `path` ends in `.png` (any case): the images written only as PNG check it before any work.
@@ -116,6 +130,10 @@ pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
 
 pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
     let time = args.time.map(check_time).transpose()?;
+    // An image type `save_image` cannot write is refused before the scene is simulated and drawn.
+    if let Some(out) = &args.out {
+        image_kind(out)?;
+    }
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
@@ -133,8 +151,7 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
             if frames == 0 {
                 return Err(CliError::new("--frames must be ≥ 1"));
             }
-            std::fs::create_dir_all(dir)
-                .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
+            crate::create_output_dir(dir)?;
             advance_to(&mut flag, time.unwrap_or(0.0))?;
             let dt = 1.0 / flag.scene.render.fps;
             let progress = crate::progress_bar(u64::from(frames), "rendering");
@@ -332,8 +349,7 @@ pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
     let scene = crate::load_scene(args.scene.as_deref())?;
     let panels = figure2_panels(&scene, time)?;
     if let Some(dir) = &args.linear_dir {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
+        crate::create_output_dir(dir)?;
         for (panel, name) in panels.iter().zip(PANEL_NAMES) {
             save_exr_rgba(panel, &dir.join(format!("{name}.exr")))?;
         }

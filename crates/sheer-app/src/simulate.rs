@@ -81,8 +81,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     if args.frames == 0 {
         return Err(CliError::new("--frames must be ≥ 1"));
     }
-    std::fs::create_dir_all(&args.out_dir)
-        .map_err(|e| CliError::new(format!("cannot create {}: {e}", args.out_dir.display())))?;
+    crate::create_output_dir(&args.out_dir)?;
     let mut sim = flag_simulation(&scene)?;
     let uvs = grid_uvs(scene.flag.columns, scene.flag.rows);
     let dt = 1.0 / f64::from(scene.render.fps);
