@@ -302,7 +302,15 @@ impl Method {
                         "must be at least 1",
                     ));
                 }
-                positive("method.cg_tolerance", cg_tolerance)?;
+                // CG starts from Δv = 0, a relative residual of 1: a tolerance of 1 or more stops it
+                // before its first iteration and leaves the cloth's velocities unchanged.
+                if !(cg_tolerance > 0.0 && cg_tolerance < 1.0) {
+                    return Err(ParamError::new(
+                        "method.cg_tolerance",
+                        cg_tolerance,
+                        "must lie in (0, 1): CG starts at a relative residual of 1",
+                    ));
+                }
             }
             Method::Pbd {
                 iterations,

@@ -648,6 +648,17 @@ fn invalid_parameters_and_time_steps_are_typed_errors() {
         }),
         "method.stiffness"
     );
+    // A relative tolerance of 1 or more stops CG before it starts: the solver would be off.
+    for cg_tolerance in [0.0, 1.0, 1e300, f64::NAN] {
+        assert_eq!(
+            bad(&|p| p.method = Method::ImplicitEuler {
+                substeps: 1,
+                cg_max_iterations: 100,
+                cg_tolerance
+            }),
+            "method.cg_tolerance"
+        );
+    }
     assert_eq!(bad(&|p| p.gravity.y = f64::INFINITY), "gravity");
     assert_eq!(bad(&|p| p.wind.air_density = -1.0), "wind.air_density");
     assert_eq!(bad(&|p| p.air_damping = f64::NAN), "air_damping");

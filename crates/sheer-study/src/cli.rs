@@ -292,7 +292,7 @@ fn budget_of(args: &BudgetArgs, config: &StudyConfig) -> Result<Budget, StudyErr
             name: "--at",
             value: at,
             reason: if config.quick {
-                "must be one of the quick sweep's sample times"
+                "must be one of the quick sweep's sample times (0.25 s only)"
             } else {
                 "must be one of the choice sweep's sample times (0.25 or 1 s)"
             },
