@@ -351,6 +351,8 @@ fn an_output_that_cannot_be_written_is_refused_before_the_scene_is_simulated() {
     let file = dir.join("a-file");
     std::fs::write(&file, "not a folder").unwrap();
     let file = file.to_str().unwrap();
+    let figure = dir.join("figure.png");
+    let figure = figure.to_str().unwrap();
     assert_one_line_error(
         &["render", "--time", "3600", "--out", "frame.jpg"],
         1,
@@ -360,8 +362,46 @@ fn an_output_that_cannot_be_written_is_refused_before_the_scene_is_simulated() {
         &["render", "--time", "3600", "--out-dir", file][..],
         &["simulate", "--frames", "216000", "--out-dir", file],
         &["assets", "--out", file],
+        &[
+            "figure2",
+            "--time",
+            "3600",
+            "--out",
+            figure,
+            "--linear-dir",
+            file,
+        ],
     ] {
         assert_one_line_error(args, 1, &[file, "it is a file"]);
+    }
+    assert_one_line_error(
+        &["study", "choose", "--quick", "--out", file],
+        1,
+        &[file, "it is a file, not a folder"],
+    );
+    // An image into a folder that is not there, or one that takes no file (`/proc`): refused before
+    // the hour is simulated.
+    let missing = dir.join("missing").join("frame.png");
+    let missing = missing.to_str().unwrap();
+    for (args, needle) in [
+        (
+            &["render", "--time", "3600", "--out", missing][..],
+            "there is no folder",
+        ),
+        (
+            &["render", "--time", "3600", "--out", "/proc/frame.png"],
+            "/proc",
+        ),
+        (
+            &["figure2", "--time", "3600", "--out", missing],
+            "there is no folder",
+        ),
+        (
+            &["render", "--time", "3600", "--out", dir.to_str().unwrap()],
+            "unknown image type",
+        ),
+    ] {
+        assert_one_line_error(args, 1, &[needle]);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

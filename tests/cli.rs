@@ -127,6 +127,22 @@ fn bench_sim_prints_the_thread_handoff_beside_two_thread_runs() {
         "{two}"
     );
     assert!(!run("1").contains("note:"));
+    // Given a threshold, the note follows it: 176 particles reach 100.
+    let (_, stderr) = sheer_ok(&[
+        "bench",
+        "sim",
+        "--grid",
+        "16x11",
+        "--method",
+        "pbd",
+        "--threads",
+        "1,2",
+        "--seconds",
+        "0",
+        "--parallel-min-particles",
+        "100",
+    ]);
+    assert!(!stderr.contains("note:"), "{stderr}");
 }
 
 #[test]

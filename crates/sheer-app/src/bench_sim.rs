@@ -333,12 +333,18 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
     let threshold = overrides
         .parallel_min_particles
         .unwrap_or(SimParams::waving_flag().parallel_min_particles);
-    if let Some(&most) = threads.iter().max().filter(|&&t| t > 1) {
+    let several: Vec<String> = threads
+        .iter()
+        .filter(|&&t| t > 1)
+        .map(|t| t.to_string())
+        .collect();
+    if !several.is_empty() {
         for &(columns, rows) in grids.iter().filter(|(c, r)| c * r < threshold) {
             eprintln!(
-                "note: {columns}x{rows} ({} particles) ran on one thread at --threads {most}: below \
+                "note: {columns}x{rows} ({} particles) ran on one thread at --threads {}: below \
                  parallel_min_particles, {threshold} (--parallel-min-particles 0 runs it on the team)",
-                columns * rows
+                columns * rows,
+                several.join(",")
             );
         }
     }

@@ -30,8 +30,10 @@ macro_rules! outln {
 }
 pub(crate) use outln;
 
-/// Creates the output folder `dir` (and its parents). A file already there is named as such: the
-/// system's own message for it, "File exists", reads as if the folder were the problem.
+/// Creates the output folder `dir` (and its parents) and checks that a file can be written in it,
+/// before any work (a render of an hour of flag found out only at its first frame). A file already
+/// there is named as such: the system's own message for it, "File exists", reads as if the folder were
+/// the problem.
 pub fn create_output_dir(dir: &std::path::Path) -> Result<(), CliError> {
     if dir.exists() && !dir.is_dir() {
         return Err(CliError::new(format!(
@@ -40,7 +42,39 @@ pub fn create_output_dir(dir: &std::path::Path) -> Result<(), CliError> {
         )));
     }
     std::fs::create_dir_all(dir)
-        .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))
+        .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
+    probe_write(dir)
+}
+
+/// Checks, before any work, that the file `path` can be written: its folder exists and takes a file,
+/// and `path` is not a folder.
+pub fn check_output_file(path: &std::path::Path) -> Result<(), CliError> {
+    if path.is_dir() {
+        return Err(CliError::new(format!(
+            "cannot write {}: it is a folder",
+            path.display()
+        )));
+    }
+    let folder = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => std::path::Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(CliError::new(format!(
+            "cannot write {}: there is no folder {}",
+            path.display(),
+            folder.display()
+        )));
+    }
+    probe_write(folder)
+}
+
+/// Writes and removes an empty file in `folder`.
+fn probe_write(folder: &std::path::Path) -> Result<(), CliError> {
+    let probe = folder.join(format!(".sheer-write-check-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .and_then(|()| std::fs::remove_file(&probe))
+        .map_err(|e| CliError::new(format!("cannot write into {}: {e}", folder.display())))
 }
 
 /// A one-line, user-facing error.

@@ -133,6 +133,7 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
     // An image type `save_image` cannot write is refused before the scene is simulated and drawn.
     if let Some(out) = &args.out {
         image_kind(out)?;
+        crate::check_output_file(out)?;
     }
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
@@ -346,10 +347,13 @@ pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
             args.out.display()
         )));
     }
+    crate::check_output_file(&args.out)?;
+    if let Some(dir) = &args.linear_dir {
+        crate::create_output_dir(dir)?;
+    }
     let scene = crate::load_scene(args.scene.as_deref())?;
     let panels = figure2_panels(&scene, time)?;
     if let Some(dir) = &args.linear_dir {
-        crate::create_output_dir(dir)?;
         for (panel, name) in panels.iter().zip(PANEL_NAMES) {
             save_exr_rgba(panel, &dir.join(format!("{name}.exr")))?;
         }

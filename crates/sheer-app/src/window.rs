@@ -495,7 +495,14 @@ impl SheerApp {
                 method = with_knob(method, MethodKnob::PbdStiffness(v));
             }
             if matches!(method, Method::ImplicitEuler { .. })
-                && let Some(v) = self.fields.cg_tolerance.show(ui, in_range(1e-12, 1.0))
+                && let Some(v) = self.fields.cg_tolerance.show(ui, |v: f64| {
+                    // CG starts at a relative residual of 1: 1 or more would stop it at once.
+                    if (1e-12..1.0).contains(&v) {
+                        Ok(())
+                    } else {
+                        Err("refused: must lie in [1e-12, 1)".to_string())
+                    }
+                })
             {
                 method = with_knob(method, MethodKnob::CgTolerance(v));
             }

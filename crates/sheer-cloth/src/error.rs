@@ -56,6 +56,8 @@ pub enum ModelError {
         len: usize,
         particle_count: usize,
     },
+    #[error("the pins' transform is not finite")]
+    NonFinitePinTransform,
     #[error("a {columns}×{rows} grid does not fit a cloth of {particle_count} particles")]
     GridShapeMismatch {
         columns: usize,

@@ -32,7 +32,7 @@ pub enum Method {
         substeps: u32,
         /// Upper bound on CG iterations per solve.
         cg_max_iterations: u32,
-        /// Relative residual `|b − A Δv| / |b|` at which CG stops.
+        /// Relative residual `|b − A Δv| / |b|` at which CG stops, in (0, 1) (CG starts at 1).
         cg_tolerance: f64,
     },
     /// Position-based dynamics (Müller et al. 2007): dimensionless stiffness in (0, 1], corrected for

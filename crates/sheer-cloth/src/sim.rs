@@ -856,7 +856,7 @@ impl Simulation {
     /// step (an animated pole: a translation, a rotation about the pole, or both).
     pub fn move_pins(&mut self, transform: DAffine3) -> Result<(), ModelError> {
         if !transform.is_finite() {
-            return Err(ModelError::NonFinitePosition(0));
+            return Err(ModelError::NonFinitePinTransform);
         }
         for (k, &i) in self.pinned_indices.iter().enumerate() {
             self.pin_targets[k] = transform.transform_point3(self.rest_positions[i as usize]);

@@ -586,6 +586,46 @@ fn a_model_built_field_by_field_is_checked_before_it_is_simulated() {
     assert_eq!(out[5], positions[5].as_vec3());
 }
 
+/// The pins' targets, the pole's transform and a restart state are checked before anything moves.
+#[test]
+fn pins_and_restarts_refuse_what_they_cannot_place() {
+    let model = ClothModel::grid(&GridSpec {
+        columns: 4,
+        rows: 3,
+        ..GridSpec::default()
+    })
+    .unwrap()
+    .with_hoist_pinned()
+    .unwrap();
+    let mut sim = Simulation::new(model.clone(), SimParams::default()).unwrap();
+    // Particle 1 is not pinned (the hoist is column 0: particles 0, 4 and 8).
+    assert_eq!(
+        sim.set_pin_target(1, DVec3::ZERO),
+        Err(ModelError::PinOutOfRange {
+            index: 1,
+            particle_count: 12
+        })
+    );
+    assert_eq!(
+        sim.set_pin_target(4, DVec3::new(0.0, f64::NAN, 0.0)),
+        Err(ModelError::NonFinitePosition(4))
+    );
+    assert!(sim.set_pin_target(4, DVec3::new(0.0, 0.5, 0.0)).is_ok());
+    assert_eq!(
+        sim.move_pins(DAffine3::from_translation(DVec3::splat(f64::INFINITY))),
+        Err(ModelError::NonFinitePinTransform)
+    );
+    let mut positions = model.positions.clone();
+    let velocities = vec![DVec3::ZERO; positions.len()];
+    positions[6].x = f64::NAN;
+    assert_eq!(
+        sim.set_state(&positions, &velocities),
+        Err(ModelError::NonFinitePosition(6))
+    );
+    // Nothing refused moved anything.
+    assert_eq!(sim.positions(), &model.positions[..]);
+}
+
 /// The wind field checks its parameters itself (it is public, and `air_velocity` gave NaN for a NaN
 /// gust frequency); a CG cap of ten per iteration saturates instead of wrapping.
 #[test]

@@ -188,6 +188,14 @@ fn config(out: &OutputArgs) -> StudyConfig {
 /// refuses a folder whose `choice.toml` is not itself from a quick run: the quick study would overwrite
 /// (or, when no setting meets the budget, delete) a full study's published results.
 fn check_output(out: &OutputArgs) -> Result<(), StudyError> {
+    if out.out.exists() && !out.out.is_dir() {
+        // The system's "File exists" reads as if the folder were the problem.
+        let error = std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "it is a file, not a folder",
+        );
+        return Err(io_error(&out.out, error));
+    }
     std::fs::create_dir_all(&out.out).map_err(|e| io_error(&out.out, e))?;
     let probe = out
         .out

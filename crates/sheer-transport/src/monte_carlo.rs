@@ -95,6 +95,9 @@ impl MonteCarloTally {
     /// Estimated flux and its standard error for `count` of the photons (per unit normal irradiance);
     /// a count beyond the photons launched is an error (its variance would be negative: NaN).
     pub fn flux_with_error(&self, count: u64) -> Result<(f64, f64)> {
+        if self.photons == 0 {
+            return Err(TransportError::PhotonCount);
+        }
         if count > self.photons {
             return Err(TransportError::Count {
                 count,
@@ -109,8 +112,8 @@ impl MonteCarloTally {
     }
 }
 
-/// Most μ bins per face: far finer than any photon count resolves, and small enough that the tallies
-/// (two counters a bin per batch) never fail to allocate (`usize::MAX` bins panicked).
+/// Most μ bins per face: far finer than any photon count resolves. A tally holds two `u64` a bin
+/// (32 MiB at this many), and a run keeps a few per thread alive (`usize::MAX` bins panicked).
 pub const MAX_BINS: usize = 1 << 20;
 
 /// Launches `photons` photons at `mu0` ∈ (0, 1] into a slab of optical thickness `tau1` and albedo Λ,
@@ -133,7 +136,17 @@ pub fn simulate_photons(
         return Err(TransportError::Bins(bins));
     }
     let batches = photons.div_ceil(BATCH);
-    let partial: Vec<MonteCarloTally> = (0..batches)
+    let empty = || MonteCarloTally {
+        photons: 0,
+        mu0,
+        reflected: vec![0; bins],
+        transmitted: vec![0; bins],
+        direct: 0,
+        absorbed: 0,
+    };
+    // Summed as they finish, so that at most a few tallies are alive at once (collecting one per batch
+    // held `batches` of them). Integer counts: the same totals in any order, on any thread count.
+    let mut total = (0..batches)
         .into_par_iter()
         .map(|batch| {
             let count = BATCH.min(photons - batch * BATCH);
@@ -141,25 +154,18 @@ pub fn simulate_photons(
             let mut rng = Xoshiro256PlusPlus::seeded(splitmix64(&mut seed_state));
             simulate_batch(tau1, albedo, mu0, count, bins, &mut rng)
         })
-        .collect();
-    let mut total = MonteCarloTally {
-        photons,
-        mu0,
-        reflected: vec![0; bins],
-        transmitted: vec![0; bins],
-        direct: 0,
-        absorbed: 0,
-    };
-    for part in partial {
-        for (sum, add) in total.reflected.iter_mut().zip(&part.reflected) {
-            *sum += add;
-        }
-        for (sum, add) in total.transmitted.iter_mut().zip(&part.transmitted) {
-            *sum += add;
-        }
-        total.direct += part.direct;
-        total.absorbed += part.absorbed;
-    }
+        .reduce(empty, |mut sum, part| {
+            for (total, add) in sum.reflected.iter_mut().zip(&part.reflected) {
+                *total += add;
+            }
+            for (total, add) in sum.transmitted.iter_mut().zip(&part.transmitted) {
+                *total += add;
+            }
+            sum.direct += part.direct;
+            sum.absorbed += part.absorbed;
+            sum
+        });
+    total.photons = photons;
     Ok(total)
 }
 
