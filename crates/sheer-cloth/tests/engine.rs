@@ -21,6 +21,18 @@ fn hoist_pinned(spec: &GridSpec, params: SimParams) -> Simulation {
     Simulation::new(model, params).unwrap()
 }
 
+/// A 4 × 3 flag pinned at its hoist (particles 0, 4 and 8).
+fn small_pinned_flag() -> ClothModel {
+    ClothModel::grid(&GridSpec {
+        columns: 4,
+        rows: 3,
+        ..GridSpec::default()
+    })
+    .unwrap()
+    .with_hoist_pinned()
+    .unwrap()
+}
+
 fn windy_flag(method: Method, parallel_min_particles: usize) -> Simulation {
     let mut params = SimParams {
         method,
@@ -447,14 +459,7 @@ fn invalid_models_are_typed_errors() {
 /// division by a zero column count) or looped on a zero-column grid before.
 #[test]
 fn a_model_built_field_by_field_is_checked_before_it_is_simulated() {
-    let good = ClothModel::grid(&GridSpec {
-        columns: 4,
-        rows: 3,
-        ..GridSpec::default()
-    })
-    .unwrap()
-    .with_hoist_pinned()
-    .unwrap();
+    let good = small_pinned_flag();
     assert_eq!(good.validate(), Ok(()));
     let rejected = |f: &dyn Fn(&mut ClothModel)| {
         let mut model = good.clone();
@@ -589,14 +594,7 @@ fn a_model_built_field_by_field_is_checked_before_it_is_simulated() {
 /// The pins' targets, the pole's transform and a restart state are checked before anything moves.
 #[test]
 fn pins_and_restarts_refuse_what_they_cannot_place() {
-    let model = ClothModel::grid(&GridSpec {
-        columns: 4,
-        rows: 3,
-        ..GridSpec::default()
-    })
-    .unwrap()
-    .with_hoist_pinned()
-    .unwrap();
+    let model = small_pinned_flag();
     let mut sim = Simulation::new(model.clone(), SimParams::default()).unwrap();
     // Particle 1 is not pinned (the hoist is column 0: particles 0, 4 and 8).
     assert_eq!(
