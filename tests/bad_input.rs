@@ -403,5 +403,22 @@ fn an_output_that_cannot_be_written_is_refused_before_the_scene_is_simulated() {
     ] {
         assert_one_line_error(args, 1, &[needle]);
     }
+    // The check leaves an existing file as it was, when the run then fails (a bad scene here).
+    let kept = dir.join("kept.png");
+    std::fs::write(&kept, "earlier frame").unwrap();
+    let scene = dir.join("bad.toml");
+    std::fs::write(&scene, "[flag]\ncolumns = 0\n").unwrap();
+    assert_one_line_error(
+        &[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            kept.to_str().unwrap(),
+        ],
+        1,
+        &["columns"],
+    );
+    assert_eq!(std::fs::read_to_string(&kept).unwrap(), "earlier frame");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -46,14 +46,24 @@ pub fn create_output_dir(dir: &std::path::Path) -> Result<(), CliError> {
     probe_write(dir)
 }
 
-/// Checks, before any work, that the file `path` can be written: its folder exists and takes a file,
-/// and `path` is not a folder.
+/// Checks, before any work, that the file `path` can be written: a file there opens for writing (and
+/// is left as it is), or one can be created there (and is removed again); a folder there is refused.
 pub fn check_output_file(path: &std::path::Path) -> Result<(), CliError> {
+    let refused =
+        |e: std::io::Error| CliError::new(format!("cannot write {}: {e}", path.display()));
     if path.is_dir() {
         return Err(CliError::new(format!(
             "cannot write {}: it is a folder",
             path.display()
         )));
+    }
+    if path.exists() {
+        // Not truncated: `/dev/stdout` or a file that a failed run should not empty.
+        return std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map(drop)
+            .map_err(refused);
     }
     let folder = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
@@ -66,7 +76,12 @@ pub fn check_output_file(path: &std::path::Path) -> Result<(), CliError> {
             folder.display()
         )));
     }
-    probe_write(folder)
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .and_then(|_| std::fs::remove_file(path))
+        .map_err(refused)
 }
 
 /// Writes and removes an empty file in `folder`.
