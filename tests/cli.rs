@@ -446,6 +446,16 @@ fn study_help_and_bad_budgets() {
     }
     for args in [
         &["study", "choose", "--quick", "--max-coverage-difference=-1"][..],
+        // A negative number as its own word is a value, checked like any other (it was an "unexpected
+        // argument", status 2).
+        &[
+            "study",
+            "choose",
+            "--quick",
+            "--max-coverage-difference",
+            "-1",
+        ],
+        &["study", "choose", "--budget", "rms", "--budget-mm", "-3"],
         &[
             "study",
             "choose",

@@ -66,16 +66,16 @@ pub struct BudgetArgs {
     pub budget: BudgetKind,
     /// Coverage budget (`--budget coverage` only): the largest time-averaged coverage difference from
     /// the reference, as a fraction of the reference's mean covered area [default: 0.04].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_coverage_difference: Option<f64>,
     /// RMS budget (`--budget rms` only): the largest RMS position error, mm [default: 5].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub budget_mm: Option<f64>,
     /// RMS budget (`--budget rms` only): the simulated time at which it applies, s (one of the choice
     /// sweep's sample times: 0.25 or 1; with `--quick`, 0.25 only). Default 0.25 s, or with `--quick`
     /// the quick sweep's first sample time: the waving flag is chaotic, and at 1 s even its reference
     /// changes by centimetres when its step is halved.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub at: Option<f64>,
 }
 
