@@ -217,6 +217,7 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
         &["bench", "sim", "--method", "rk4"][..],
         &["bench", "sim", "--grid", "64by46"],
         &["bench", "sim", "--grid", "1x46"],
+        &["bench", "sim", "--grid", "99999999999999999999x2"],
         &["bench", "sim", "--threads", "0"],
         &["bench", "sim", "--threads", "1,100000"],
         &["bench", "sim", "--substeps", "0"],

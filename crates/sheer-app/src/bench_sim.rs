@@ -93,16 +93,26 @@ fn parse_grid(text: &str) -> Result<(usize, usize), CliError> {
             "--grid `{text}`: expected COLUMNSxROWS, e.g. 64x46"
         ))
     };
-    let (columns, rows) = text.split_once(['x', 'X']).ok_or_else(bad)?;
-    let columns: usize = columns.trim().parse().map_err(|_| bad())?;
-    let rows: usize = rows.trim().parse().map_err(|_| bad())?;
     // The scene file's limit: beyond it a grid runs out of memory (or time) before it shows anything.
-    if !(2..=MAX_GRID_SIDE).contains(&columns) || !(2..=MAX_GRID_SIDE).contains(&rows) {
-        return Err(CliError::new(format!(
+    let out_of_range = || {
+        CliError::new(format!(
             "--grid `{text}`: each side must lie in [2, {MAX_GRID_SIDE}] particles"
-        )));
-    }
-    Ok((columns, rows))
+        ))
+    };
+    let side = |digits: &str| {
+        let digits = digits.trim();
+        match digits.parse::<usize>() {
+            Ok(side) if (2..=MAX_GRID_SIDE).contains(&side) => Ok(side),
+            Ok(_) => Err(out_of_range()),
+            // All digits, yet no usize: a number beyond the range, not a malformed grid.
+            Err(_) if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) => {
+                Err(out_of_range())
+            }
+            Err(_) => Err(bad()),
+        }
+    };
+    let (columns, rows) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    Ok((side(columns)?, side(rows)?))
 }
 
 /// One measured case.
