@@ -13,8 +13,8 @@
 use std::f64::consts::PI;
 
 use crate::model::{
-    Albedo, Cosine, IrradianceConvention, OpticalThickness, single_scattered_reflected_radiance,
-    single_scattered_transmitted_radiance,
+    Albedo, Cosine, IrradianceConvention, OpticalThickness, SlabParameterError,
+    single_scattered_reflected_radiance, single_scattered_transmitted_radiance,
 };
 
 /// Nodes and weights of the `n`-point Gauss–Legendre rule on [−1, 1] (Newton iteration on `P_n`).
@@ -69,6 +69,12 @@ pub fn integrate(
 /// along the view ray through a slab of thickness 1 m. Panels are sized so that the integrand's exponent
 /// changes by at most 1/2 per panel; with 20 nodes per panel the rule is exact to rounding
 /// (error ≤ (1/2)^40/40! relative per panel).
+///
+/// Along the ray the integrand is `e^{−(a + b s)}`; where it falls 750 e-folds below its largest value
+/// (below the smallest `f64` relative to it) the path is cut, so that a thick slab or a grazing cosine
+/// needs at most 1 500 panels (the panel count was capped at 10⁶ instead, silently losing the exactness).
+/// The inputs are checked as the model's are; a `mu` so small that the view path overflows is refused
+/// (`SlabParameterError::Cosine`).
 pub fn single_scattered_radiance_by_view_ray_quadrature(
     optical_thickness: f64,
     albedo: f64,
@@ -76,20 +82,48 @@ pub fn single_scattered_radiance_by_view_ray_quadrature(
     mu: f64,
     beam_normal_irradiance: f64,
     lit_side: bool,
-) -> f64 {
+) -> Result<f64, SlabParameterError> {
+    OpticalThickness::new(optical_thickness)?;
+    Albedo::new(albedo)?;
+    Cosine::new("mu0", mu0)?;
+    Cosine::new("mu", mu)?;
+    if !(beam_normal_irradiance.is_finite() && beam_normal_irradiance >= 0.0) {
+        return Err(SlabParameterError::Irradiance(beam_normal_irradiance));
+    }
     let thickness = 1.0; // m
     let extinction = optical_thickness / thickness; // σt, 1/m
     let path_length = thickness / mu; // through the slab along the view ray, m
+    if !path_length.is_finite() {
+        return Err(SlabParameterError::Cosine {
+            name: "mu",
+            value: mu,
+        });
+    }
     let rule = gauss_legendre(20);
-    // Exponent rate along s: σt (1 ± μ/μ0); over the whole path that is τ1 |1/μ ± 1/μ0|.
-    let total_exponent = optical_thickness * (1.0 / mu + 1.0 / mu0);
-    let panels = ((2.0 * total_exponent).ceil() as usize).clamp(1, 1_000_000);
+    // The exponent's rate along s: σt (1 + μ/μ0) towards the lit face, σt (1 − μ/μ0) towards the far one
+    // (the beam's depth shrinks as the view path grows), either sign.
+    let rate = extinction
+        * if lit_side {
+            1.0 + mu / mu0
+        } else {
+            1.0 - mu / mu0
+        };
+    const NEGLIGIBLE_E_FOLDS: f64 = 750.0;
+    let span = NEGLIGIBLE_E_FOLDS / rate.abs();
+    let (start, end) = if span >= path_length {
+        (0.0, path_length)
+    } else if rate > 0.0 {
+        (0.0, span) // largest at s = 0
+    } else {
+        (path_length - span, path_length) // largest at the end of the path
+    };
+    let panels = ((2.0 * rate.abs() * (end - start)).ceil() as usize).max(1);
     let integrand = |s: f64| {
         let depth = if lit_side { s * mu } else { thickness - s * mu };
         let beam = beam_normal_irradiance * (-extinction * depth / mu0).exp();
         extinction * albedo / (4.0 * PI) * beam * (-extinction * s).exp()
     };
-    integrate(&rule, 0.0, path_length, panels, integrand)
+    Ok(integrate(&rule, start, end, panels, integrand))
 }
 
 /// Emergent single-scattered and directly transmitted flux per unit slab area for a beam of unit normal

@@ -48,7 +48,8 @@ fn view_ray_quadrature_matches_eqs_4_and_5_with_beam_normal_irradiance() {
                 for lit_side in [true, false] {
                     let quadrature = single_scattered_radiance_by_view_ray_quadrature(
                         t, 0.9, m0, m, 1.0, lit_side,
-                    );
+                    )
+                    .unwrap();
                     let normal =
                         model_radiance(t, 0.9, m0, m, lit_side, IrradianceConvention::NormalToBeam);
                     let literal =
@@ -116,7 +117,8 @@ fn eq5_near_the_diagonal_matches_quadrature() {
             for &delta in &[0.0, 1e-16, -1e-15, 1e-12, 1e-8, -1e-5, 1e-3, 0.1] {
                 let m = (m0 * (1.0f64 + delta)).min(1.0);
                 let quadrature =
-                    single_scattered_radiance_by_view_ray_quadrature(t, 1.0, m0, m, 1.0, false);
+                    single_scattered_radiance_by_view_ray_quadrature(t, 1.0, m0, m, 1.0, false)
+                        .unwrap();
                 let ours = model_radiance(t, 1.0, m0, m, false, IrradianceConvention::NormalToBeam);
                 if quadrature < 1e-250 {
                     assert!(ours < 1e-249);
@@ -177,5 +179,36 @@ proptest! {
         let tolerance = balance.quadrature_error_estimate + balance.evaluations as f64 * f64::EPSILON * balance.incident;
         prop_assert!(out <= balance.incident + tolerance,
             "tau1={t} Lambda={a} mu0={m0}: out {out:e} > incident {:e} (+{tolerance:e})", balance.incident);
+    }
+}
+
+/// The reference quadrature stays exact however thick the slab or grazing the view: it integrates only
+/// where the integrand is within 750 e-folds of its largest value. It capped its panels at 10⁶ instead,
+/// so at τ1 = 10¹⁰ each panel spanned 2·10⁶ e-folds and its nodes all fell past the boundary layer: 0.
+/// Bad inputs are errors (μ = 0 gave NaN).
+#[test]
+fn view_ray_quadrature_is_exact_for_thick_slabs_and_refuses_bad_input() {
+    for (tau1, cosine) in [(1e10, 0.01), (1e4, 1.0), (300.0, 0.05)] {
+        let quadrature =
+            single_scattered_radiance_by_view_ray_quadrature(tau1, 1.0, cosine, cosine, 1.0, true)
+                .unwrap();
+        // Eq. (4) at μ = μ0 on an opaque slab: Λ/(4π)·½.
+        let expected = 1.0 / (8.0 * std::f64::consts::PI);
+        assert!(
+            (quadrature - expected).abs() <= 1e-12 * expected,
+            "τ1 = {tau1}: {quadrature} vs {expected}"
+        );
+    }
+    for (mu0, mu, irradiance) in [
+        (0.5, 0.0, 1.0),
+        (0.0, 0.5, 1.0),
+        (0.5, 0.5, f64::NAN),
+        (0.5, 1e-310, 1.0),
+    ] {
+        assert!(
+            single_scattered_radiance_by_view_ray_quadrature(1.0, 0.5, mu0, mu, irradiance, false)
+                .is_err(),
+            "{mu0} {mu} {irradiance}"
+        );
     }
 }
