@@ -95,6 +95,14 @@ pub fn simulate(
                 reason: "must be finite and > 0 s",
             });
         }
+        // The cast below would saturate at u64::MAX: a run that never ends.
+        if time / step > f64::from(u32::MAX) {
+            return Err(StudyError::InvalidInput {
+                name: "sample time",
+                value: time,
+                reason: "is more than 2³² steps away: choose a longer step",
+            });
+        }
         sample_steps.push(to_steps(time));
     }
     sample_steps.sort_unstable();

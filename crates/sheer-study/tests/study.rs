@@ -609,3 +609,22 @@ fn the_ablation_refuses_a_timing_that_times_nothing() {
         );
     }
 }
+
+/// A sample time more than 2³² steps away is refused at once: its step count saturated at `u64::MAX`
+/// and the run would never have ended.
+#[test]
+fn a_run_too_long_for_its_step_is_refused() {
+    let scene = Scene::flag((6, 5)).unwrap();
+    let result = simulate(&scene, Method::default(), 1e-9, &[1e10], &Monitor::hidden());
+    assert!(
+        matches!(
+            result,
+            Err(sheer_study::StudyError::InvalidInput {
+                name: "sample time",
+                ..
+            })
+        ),
+        "{:?}",
+        result.err()
+    );
+}
