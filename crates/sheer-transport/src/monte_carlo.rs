@@ -81,6 +81,32 @@ pub struct MonteCarloTally {
 }
 
 impl MonteCarloTally {
+    /// A tally of no photons at `mu0`, `bins` empty bins a face.
+    fn empty(mu0: f64, bins: usize) -> Self {
+        MonteCarloTally {
+            photons: 0,
+            mu0,
+            reflected: vec![0; bins],
+            transmitted: vec![0; bins],
+            direct: 0,
+            absorbed: 0,
+        }
+    }
+
+    /// The photons of `self` and `other` (the same beam and bins) in one tally.
+    fn merged(mut self, other: Self) -> Self {
+        self.photons += other.photons;
+        for (sum, add) in self.reflected.iter_mut().zip(&other.reflected) {
+            *sum += add;
+        }
+        for (sum, add) in self.transmitted.iter_mut().zip(&other.transmitted) {
+            *sum += add;
+        }
+        self.direct += other.direct;
+        self.absorbed += other.absorbed;
+        self
+    }
+
     /// Number of μ bins on each face.
     pub fn bins(&self) -> usize {
         self.reflected.len()
@@ -136,17 +162,9 @@ pub fn simulate_photons(
         return Err(TransportError::Bins(bins));
     }
     let batches = photons.div_ceil(BATCH);
-    let empty = || MonteCarloTally {
-        photons: 0,
-        mu0,
-        reflected: vec![0; bins],
-        transmitted: vec![0; bins],
-        direct: 0,
-        absorbed: 0,
-    };
     // Summed as they finish, so that at most a few tallies are alive at once (collecting one per batch
     // held `batches` of them). Integer counts: the same totals in any order, on any thread count.
-    let mut total = (0..batches)
+    let total = (0..batches)
         .into_par_iter()
         .map(|batch| {
             let count = BATCH.min(photons - batch * BATCH);
@@ -154,18 +172,10 @@ pub fn simulate_photons(
             let mut rng = Xoshiro256PlusPlus::seeded(splitmix64(&mut seed_state));
             simulate_batch(tau1, albedo, mu0, count, bins, &mut rng)
         })
-        .reduce(empty, |mut sum, part| {
-            for (total, add) in sum.reflected.iter_mut().zip(&part.reflected) {
-                *total += add;
-            }
-            for (total, add) in sum.transmitted.iter_mut().zip(&part.transmitted) {
-                *total += add;
-            }
-            sum.direct += part.direct;
-            sum.absorbed += part.absorbed;
-            sum
-        });
-    total.photons = photons;
+        .reduce(
+            || MonteCarloTally::empty(mu0, bins),
+            MonteCarloTally::merged,
+        );
     Ok(total)
 }
 
@@ -179,11 +189,7 @@ fn simulate_batch(
 ) -> MonteCarloTally {
     let mut tally = MonteCarloTally {
         photons,
-        mu0,
-        reflected: vec![0; bins],
-        transmitted: vec![0; bins],
-        direct: 0,
-        absorbed: 0,
+        ..MonteCarloTally::empty(mu0, bins)
     };
     let bin_of = |mu: f64| ((mu * bins as f64) as usize).min(bins - 1);
     for _ in 0..photons {
