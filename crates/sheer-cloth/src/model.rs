@@ -317,15 +317,8 @@ impl ClothModel {
         if particle_count == 0 {
             return Err(ModelError::EmptyMesh);
         }
-        for (field, len) in [("masses", self.masses.len()), ("pinned", self.pinned.len())] {
-            if len != particle_count {
-                return Err(ModelError::LengthMismatch {
-                    field,
-                    len,
-                    particle_count,
-                });
-            }
-        }
+        check_length("masses", self.masses.len(), particle_count)?;
+        check_length("pinned", self.pinned.len(), particle_count)?;
         check_positions(&self.positions)?;
         for (index, &mass) in self.masses.iter().enumerate() {
             if !(mass.is_finite() && mass > 0.0) {
@@ -367,13 +360,7 @@ impl ClothModel {
     /// Pins the given particles.
     pub fn pin(&mut self, indices: &[usize]) -> Result<&mut Self, ModelError> {
         let particle_count = self.positions.len();
-        if self.pinned.len() != particle_count {
-            return Err(ModelError::LengthMismatch {
-                field: "pinned",
-                len: self.pinned.len(),
-                particle_count,
-            });
-        }
+        check_length("pinned", self.pinned.len(), particle_count)?;
         if let Some(&index) = indices.iter().find(|&&i| i >= particle_count) {
             return Err(ModelError::PinOutOfRange {
                 index,
@@ -413,6 +400,23 @@ fn check_density(areal_density: f64) -> Result<(), ModelError> {
         Ok(())
     } else {
         Err(ModelError::InvalidDensity(areal_density))
+    }
+}
+
+/// Whether the per-particle array `field` has `len` entries, one per particle.
+pub(crate) fn check_length(
+    field: &'static str,
+    len: usize,
+    particle_count: usize,
+) -> Result<(), ModelError> {
+    if len == particle_count {
+        Ok(())
+    } else {
+        Err(ModelError::LengthMismatch {
+            field,
+            len,
+            particle_count,
+        })
     }
 }
 

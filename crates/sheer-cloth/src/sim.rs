@@ -13,7 +13,7 @@ use crate::components::Xyz;
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
 use crate::grid_constraints::GridConstraints;
 use crate::grid_wind::{BodyForce, SplitShares, add_grid_triangle_forces, grid_triangle_forces};
-use crate::model::{ClothModel, GridShape, Spring, SpringKind};
+use crate::model::{ClothModel, GridShape, Spring, SpringKind, check_length};
 use crate::nearest::nearest_points;
 use crate::parallel::{TeamSlot, fill, first_index_screened, sum};
 use crate::params::{Method, SimParams, SpringParams, Wind};
@@ -890,18 +890,8 @@ impl Simulation {
         velocities: &[DVec3],
     ) -> Result<(), ModelError> {
         let particle_count = self.positions.len();
-        for (field, len) in [
-            ("positions", positions.len()),
-            ("velocities", velocities.len()),
-        ] {
-            if len != particle_count {
-                return Err(ModelError::LengthMismatch {
-                    field,
-                    len,
-                    particle_count,
-                });
-            }
-        }
+        check_length("positions", positions.len(), particle_count)?;
+        check_length("velocities", velocities.len(), particle_count)?;
         if let Some(i) = positions
             .iter()
             .zip(velocities)
