@@ -77,20 +77,27 @@ pub enum ImageKind {
     Exr,
 }
 
-/// The type of image `path` names by its extension (any case): `.png` or `.exr`.
-pub fn image_kind(path: &Path) -> Result<ImageKind, CliError> {
+/// The type of image `path` names by its extension (any case), if it is one `save_image` writes.
+fn extension_kind(path: &Path) -> Option<ImageKind> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("png") => Ok(ImageKind::Png),
-        Some("exr") => Ok(ImageKind::Exr),
-        _ => Err(CliError::new(format!(
+        Some("png") => Some(ImageKind::Png),
+        Some("exr") => Some(ImageKind::Exr),
+        _ => None,
+    }
+}
+
+/// The type of image `path` names by its extension (any case): `.png` or `.exr`.
+pub fn image_kind(path: &Path) -> Result<ImageKind, CliError> {
+    extension_kind(path).ok_or_else(|| {
+        CliError::new(format!(
             "{}: unknown image type (use .png or .exr)",
             path.display()
-        ))),
-    }
+        ))
+    })
 }
 
 /// Saves a linear image as PNG (exposure, sRGB) or OpenEXR (linear float), by extension.
@@ -105,9 +112,7 @@ pub fn save_image(image: &LinearImage, path: &Path, exposure: f32) -> Result<(),
 
 /// Whether `path` ends in `.png` (any case): the images written only as PNG check it before any work.
 pub fn has_png_extension(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    extension_kind(path) == Some(ImageKind::Png)
 }
 
 /// Simulates the scene up to `time` seconds at its frame rate.
