@@ -23,6 +23,17 @@ fn sheer_ok(args: &[&str]) -> (String, String) {
     )
 }
 
+/// `sheer` with `args`, after checking that it failed as the CLI promises: status 1 and one line that
+/// starts `error: `. Its stderr.
+fn sheer_error(args: &[&str]) -> String {
+    let out = sheer(args);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+    assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+    stderr
+}
+
 /// `sheer bench sim --csv` on the 16 × 11 flag, one thread, one frame per case, with `options`: its
 /// output, after checking that it succeeded.
 fn bench_sim_csv(options: &[&str]) -> String {
@@ -229,11 +240,7 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
         &["bench", "memory", "--threads", "100000"],
         &["bench", "memory", "--seconds", "NaN"],
     ] {
-        let out = sheer(args);
-        assert_eq!(out.status.code(), Some(1), "{args:?}");
-        let stderr = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
-        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        sheer_error(args);
     }
 }
 
@@ -285,7 +292,7 @@ fn bad_scene_files_are_one_line_errors_naming_the_problem() {
         ("this is not toml", "line 1"),
     ] {
         std::fs::write(&scene, text).unwrap();
-        let out = sheer(&[
+        let stderr = sheer_error(&[
             "simulate",
             "--scene",
             scene.to_str().unwrap(),
@@ -294,24 +301,16 @@ fn bad_scene_files_are_one_line_errors_naming_the_problem() {
             "--out-dir",
             dir.to_str().unwrap(),
         ]);
-        assert_eq!(out.status.code(), Some(1), "{text}");
-        let stderr = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{stderr}");
         assert!(stderr.contains(needle), "{text}: {stderr}");
     }
-    let out = sheer(&[
+    let stderr = sheer_error(&[
         "simulate",
         "--scene",
         "/nonexistent/scene.toml",
         "--out-dir",
         "/tmp",
     ]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(
-        String::from_utf8(out.stderr)
-            .unwrap()
-            .contains("cannot read scene")
-    );
+    assert!(stderr.contains("cannot read scene"), "{stderr}");
 }
 
 /// A flag in its failure region (1 024 columns at the default ×40 in the default wind diverges at frame
@@ -323,7 +322,7 @@ fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("wide.scene.toml");
     std::fs::write(&scene, "[flag]\ncolumns = 1024\n").unwrap();
-    let out = sheer(&[
+    let stderr = sheer_error(&[
         "simulate",
         "--scene",
         scene.to_str().unwrap(),
@@ -332,9 +331,6 @@ fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
         "--out-dir",
         dir.to_str().unwrap(),
     ]);
-    assert_eq!(out.status.code(), Some(1));
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(
         stderr.starts_with("error: frame 45: step 45 diverged: ")
             && stderr.contains("more sub-steps a frame"),
@@ -362,13 +358,8 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
         "--out",
         dir.to_str().unwrap(),
     ];
-    let refused = sheer(&args);
-    assert_eq!(refused.status.code(), Some(1));
-    let stderr = String::from_utf8(refused.stderr).unwrap();
-    assert!(
-        stderr.starts_with("error: ") && stderr.contains("--force"),
-        "{stderr}"
-    );
+    let stderr = sheer_error(&args);
+    assert!(stderr.contains("--force"), "{stderr}");
     assert_eq!(
         std::fs::read_to_string(dir.join("choice.toml")).unwrap(),
         full
@@ -379,10 +370,7 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
         ("seed = 3\n", "has no `quick` flag"),
     ] {
         std::fs::write(dir.join("choice.toml"), text).unwrap();
-        let refused = sheer(&args);
-        assert_eq!(refused.status.code(), Some(1));
-        let stderr = String::from_utf8(refused.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        let stderr = sheer_error(&args);
         assert!(
             stderr.contains("is not a study's choice file") && stderr.contains(reason),
             "{stderr}"
@@ -483,11 +471,7 @@ fn study_help_and_bad_budgets() {
             "0.1",
         ],
     ] {
-        let out = sheer(args);
-        assert_eq!(out.status.code(), Some(1), "{args:?}");
-        let stderr = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
-        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        sheer_error(args);
     }
 }
 
