@@ -339,8 +339,8 @@ pub const FPS_RANGE: (f32, f32) = (1.0, 1000.0);
 /// Largest light flux, W. Far above any lamp (the irradiance at 1 m is 8·10⁴ W/m², about 60 suns)
 /// and far enough below f32's 3.4·10³⁸ that no radiance overflows an f32 render target. A half-float
 /// target (some GL drivers) holds at most 65 504 W/(m²·sr), which such a light near the cloth exceeds:
-/// that frame is then an error naming the pixel (`RenderError::NonFinitePixel`), not an image of
-/// infinities.
+/// that frame is then an error naming the pixel (`RenderError::OverflowedPixel`), not an image of
+/// infinities or saturated values.
 pub const MAX_FLUX_W: f32 = 1e6;
 /// Largest background radiance (colour, painting white), W/(m²·sr), and largest display exposure:
 /// the same margin against overflow of an f32 target (a half-float one: as for the flux above).

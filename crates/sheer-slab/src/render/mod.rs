@@ -161,18 +161,21 @@ pub enum RenderError {
     /// A camera that defines no view.
     #[error("invalid camera: {0}")]
     Camera(#[from] CameraError),
-    /// A pixel read back is NaN or infinite: the radiance overflowed the target's float format (a light
-    /// of enormous flux, or one almost touching the cloth). Reported rather than handed on.
+    /// A pixel read back is NaN, infinite, or saturated at the largest finite value of the target's
+    /// float format ([`TargetFormat::largest_finite`]): the radiance overflowed the target (a light of
+    /// enormous flux, or one almost touching the cloth). GPUs differ in how they store an overflow:
+    /// Mesa's lavapipe writes infinity, NVIDIA's Vulkan driver (H200, 580.159) writes `f32::MAX`; both
+    /// are reported rather than handed on as an image.
     #[error(
         "pixel ({x}, {y}) came out {value} (the radiance overflows the {format:?} target): lower \
          the light's flux or move it away from the cloth"
     )]
-    NonFinitePixel {
+    OverflowedPixel {
         /// Column.
         x: u32,
         /// Row from the top.
         y: u32,
-        /// The first non-finite channel's value.
+        /// The first overflowed channel's value: NaN, ±infinity or ±[`TargetFormat::largest_finite`].
         value: f32,
         /// The render target's format.
         format: TargetFormat,
@@ -233,6 +236,30 @@ pub enum TargetFormat {
     Rgba32Float,
     /// 16-bit float per channel (relative precision 2^-11).
     Rgba16Float,
+}
+
+impl TargetFormat {
+    /// The largest finite value a channel of this format holds (IEEE 754 binary32: `f32::MAX`;
+    /// binary16: 65 504). A channel at this value has no headroom left: a GPU that saturates an
+    /// overflowing result instead of writing infinity leaves exactly this value behind.
+    pub fn largest_finite(self) -> f32 {
+        match self {
+            TargetFormat::Rgba32Float => f32::MAX,
+            TargetFormat::Rgba16Float => 65_504.0,
+        }
+    }
+}
+
+/// The first channel of `pixels` that overflowed a target of `format` — NaN, infinite, or at the
+/// format's largest finite magnitude — as (pixel index, value).
+fn first_overflowed_channel(pixels: &[[f32; 4]], format: TargetFormat) -> Option<(usize, f32)> {
+    let largest = format.largest_finite();
+    pixels.iter().enumerate().find_map(|(index, pixel)| {
+        pixel
+            .iter()
+            .find(|channel| !channel.is_finite() || channel.abs() >= largest)
+            .map(|&value| (index, value))
+    })
 }
 
 /// A pipeline variant: path, dual-source output (per-channel τ1), thickness texture, all-orders model,
@@ -924,13 +951,8 @@ impl HeadlessRenderer {
                 }
             }
         }
-        if let Some((index, value)) = pixels.iter().enumerate().find_map(|(i, pixel)| {
-            pixel
-                .iter()
-                .find(|channel| !channel.is_finite())
-                .map(|&value| (i, value))
-        }) {
-            return Err(RenderError::NonFinitePixel {
+        if let Some((index, value)) = first_overflowed_channel(&pixels, self.target_format) {
+            return Err(RenderError::OverflowedPixel {
                 x: index as u32 % self.width,
                 y: index as u32 / self.width,
                 value,
@@ -1723,5 +1745,52 @@ mod tests {
                 other => panic!("{list:?}: expected UnknownBackend, got {other:?}"),
             }
         }
+    }
+
+    /// An overflow reads back as infinity on lavapipe but as `f32::MAX` on NVIDIA's Vulkan driver
+    /// (seen on an H200 with driver 580.159: the gpu_vs_cpu overflow test got an image of 3.4·10³⁸
+    /// pixels); both, NaN, and the half-float ceiling are overflow, and the largest value below the
+    /// ceiling (3.4·10³⁸ and 1.0·10³⁴ are legitimate radiances of a 3·10³⁸ W light) is not.
+    #[test]
+    fn overflow_is_infinity_nan_or_the_format_ceiling() {
+        let background = [0.1, 0.1, 0.1, 1.0];
+        let with = |channel: usize, value: f32| {
+            let mut pixels = vec![background; 6];
+            pixels[4][channel] = value;
+            pixels
+        };
+        for format in [TargetFormat::Rgba32Float, TargetFormat::Rgba16Float] {
+            let ceiling = format.largest_finite();
+            for value in [
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::NAN,
+                ceiling,
+                -ceiling,
+            ] {
+                let found = first_overflowed_channel(&with(1, value), format);
+                assert!(
+                    matches!(found, Some((4, v)) if v.to_bits() == value.to_bits()),
+                    "{format:?} {value}: {found:?}"
+                );
+            }
+            let just_below = f32::from_bits(ceiling.to_bits() - 1);
+            assert_eq!(first_overflowed_channel(&with(2, just_below), format), None);
+            assert_eq!(first_overflowed_channel(&with(0, 1.0e4), format), None);
+        }
+        assert_eq!(
+            first_overflowed_channel(&with(0, 1.0e34), TargetFormat::Rgba32Float),
+            None
+        );
+        // The half-float ceiling is a legitimate radiance in an f32 target.
+        assert_eq!(
+            first_overflowed_channel(&with(3, 65_504.0), TargetFormat::Rgba32Float),
+            None
+        );
+        // f16's next value below 65 504 is 65 472.
+        assert_eq!(
+            first_overflowed_channel(&with(3, 65_472.0), TargetFormat::Rgba16Float),
+            None
+        );
     }
 }

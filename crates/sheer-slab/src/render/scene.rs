@@ -2,6 +2,7 @@
 //! the linear image that comes back (with exposure and sRGB encoding for display).
 
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 use thiserror::Error;
@@ -307,11 +308,27 @@ impl Camera {
 }
 
 /// An RGBA image of `f32` texels, row-major from the top (v = 0) row.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// Cloning shares the texels (a reference count), and comparing two clones is a pointer comparison:
+/// the renderer keeps a clone of each texture it uploaded and compares it with the one it is given
+/// every frame, which for the 1100×800 flag texture had been a 14 MB pass a frame.
+#[derive(Debug, Clone)]
 pub struct Texture2d {
     width: u32,
     height: u32,
-    texels: Vec<[f32; 4]>,
+    texels: Arc<[[f32; 4]]>,
+    /// Per channel, the least and the greatest texel, found once here so that the checks that run
+    /// every frame ([`ShadingParams::validate`]) need not pass over every texel.
+    channel_min: [f32; 4],
+    channel_max: [f32; 4],
+}
+
+impl PartialEq for Texture2d {
+    fn eq(&self, other: &Self) -> bool {
+        self.width == other.width
+            && self.height == other.height
+            && (Arc::ptr_eq(&self.texels, &other.texels) || self.texels == other.texels)
+    }
 }
 
 impl Texture2d {
@@ -327,10 +344,19 @@ impl Texture2d {
         if let Some(index) = texels.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
             return Err(ShadingError::NonFiniteTexel { index });
         }
+        let (mut channel_min, mut channel_max) = ([f32::INFINITY; 4], [f32::NEG_INFINITY; 4]);
+        for texel in &texels {
+            for channel in 0..4 {
+                channel_min[channel] = channel_min[channel].min(texel[channel]);
+                channel_max[channel] = channel_max[channel].max(texel[channel]);
+            }
+        }
         Ok(Self {
             width,
             height,
-            texels,
+            texels: texels.into(),
+            channel_min,
+            channel_max,
         })
     }
 
@@ -515,26 +541,35 @@ impl ShadingParams {
         {
             return Err(ShadingError::OpticalThickness(self.optical_thickness));
         }
-        for (texel, value) in self.albedo_texture.texels.iter().enumerate() {
-            let in_range = (0..3).all(|c| {
+        // Each check below holds for every texel when it holds for each channel's least and greatest
+        // texel: multiplying by a scale ≥ 0 is monotone in f32 (the exact product is, and rounding
+        // keeps order), so the texels that pass form an interval. Only a failure looks for the first
+        // texel that fails, to name it. Checked against a pass over every texel in
+        // the unit test `texture_checks_by_extremes_equal_a_pass_over_every_texel`.
+        let albedo_in_range = |value: &[f32; 4]| {
+            (0..3).all(|c| {
                 let albedo = self.albedo_scale[c] * value[c];
                 albedo.is_finite() && (0.0..=1.0).contains(&albedo) && self.albedo_scale[c] >= 0.0
+            })
+        };
+        let albedo = &self.albedo_texture;
+        if !(albedo_in_range(&albedo.channel_min) && albedo_in_range(&albedo.channel_max))
+            && let Some(texel) = albedo.texels.iter().position(|v| !albedo_in_range(v))
+        {
+            return Err(ShadingError::Albedo {
+                scale: self.albedo_scale,
+                texel,
             });
-            if !in_range {
-                return Err(ShadingError::Albedo {
-                    scale: self.albedo_scale,
-                    texel,
-                });
-            }
         }
         if let Some(thickness) = &self.thickness_texture {
-            for (texel, value) in thickness.texels.iter().enumerate() {
-                if !(6.103_515_6e-5..=65504.0).contains(&value[0]) {
-                    return Err(ShadingError::Thickness {
-                        texel,
-                        value: value[0],
-                    });
-                }
+            let in_range = |value: f32| (6.103_515_6e-5..=65504.0).contains(&value);
+            if !(in_range(thickness.channel_min[0]) && in_range(thickness.channel_max[0]))
+                && let Some(texel) = thickness.texels.iter().position(|v| !in_range(v[0]))
+            {
+                return Err(ShadingError::Thickness {
+                    texel,
+                    value: thickness.texels[texel][0],
+                });
             }
         }
         if !(self.light_flux.is_finite() && self.light_flux >= 0.0) {
@@ -560,14 +595,12 @@ impl ShadingParams {
     /// Every τ1 the renderer can meet (τ1 per channel times the half-float thickness texels, which
     /// bilinear filtering only mixes) must lie in `[min, max]`, up to [`TABLE_RANGE_SLACK`].
     fn validate_table_range(&self, (min, max): (f64, f64)) -> Result<(), ShadingError> {
+        // Rounding to half floats keeps order, so the extreme texels give the extreme half floats.
         let (low, high) = match &self.thickness_texture {
-            Some(texture) => texture
-                .texels
-                .iter()
-                .fold((f64::MAX, f64::MIN), |(lo, hi), t| {
-                    let v = f64::from(crate::render::quantize_to_half(t[0]));
-                    (lo.min(v), hi.max(v))
-                }),
+            Some(texture) => (
+                f64::from(crate::render::quantize_to_half(texture.channel_min[0])),
+                f64::from(crate::render::quantize_to_half(texture.channel_max[0])),
+            ),
             None => (1.0, 1.0),
         };
         for (channel, &tau) in self.optical_thickness.iter().enumerate() {
@@ -704,6 +737,138 @@ pub fn linear_to_srgb8(value: f32) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// A texel value: ordinary, at or beyond the albedo and half-float thickness bounds, or negative.
+    fn texel_value() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            0.0f32..=1.0,
+            Just(0.0f32),
+            Just(-0.0f32),
+            Just(1.0f32),
+            Just(f32::from_bits(1.0f32.to_bits() + 1)),
+            Just(6.103_515_6e-5f32),
+            Just(6.1e-5f32),
+            Just(65504.0f32),
+            Just(65520.0f32),
+            -2.0f32..0.0,
+            0.0f32..70_000.0,
+            Just(3e38f32),
+        ]
+    }
+
+    fn scale() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            0.0f32..=2.0,
+            Just(0.0f32),
+            Just(-0.0f32),
+            Just(1.0f32),
+            Just(f32::from_bits(1.0f32.to_bits() - 1)),
+            Just(-0.5f32),
+            Just(f32::INFINITY),
+            Just(f32::NAN),
+            Just(1e-39f32),
+        ]
+    }
+
+    fn texture() -> impl Strategy<Value = Texture2d> {
+        (1u32..5, 1u32..5).prop_flat_map(|(width, height)| {
+            prop::collection::vec(
+                prop::array::uniform4(texel_value()),
+                (width * height) as usize,
+            )
+            .prop_map(move |texels| Texture2d::new(width, height, texels).unwrap())
+        })
+    }
+
+    /// The texture checks of `ShadingParams::validate` as a pass over every texel (what it did
+    /// before it used each channel's extremes).
+    fn texture_checks_texel_by_texel(params: &ShadingParams) -> Result<(), ShadingError> {
+        for (texel, value) in params.albedo_texture.texels.iter().enumerate() {
+            let in_range = (0..3).all(|c| {
+                let albedo = params.albedo_scale[c] * value[c];
+                albedo.is_finite() && (0.0..=1.0).contains(&albedo) && params.albedo_scale[c] >= 0.0
+            });
+            if !in_range {
+                return Err(ShadingError::Albedo {
+                    scale: params.albedo_scale,
+                    texel,
+                });
+            }
+        }
+        if let Some(thickness) = &params.thickness_texture {
+            for (texel, value) in thickness.texels.iter().enumerate() {
+                if !(6.103_515_6e-5..=65504.0).contains(&value[0]) {
+                    return Err(ShadingError::Thickness {
+                        texel,
+                        value: value[0],
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// The per-frame checks that use each channel's least and greatest texel accept and refuse
+        /// exactly what a pass over every texel does, and name the same first texel.
+        #[test]
+        fn texture_checks_by_extremes_equal_a_pass_over_every_texel(
+            albedo_texture in texture(),
+            thickness_texture in proptest::option::of(texture()),
+            albedo_scale in prop::array::uniform3(scale()),
+            table_min in 0.001f64..1.0,
+            table_span in 1.0f64..1000.0,
+        ) {
+            let mut params = ShadingParams::uniform(1.0, 1.0, Vec3::ONE, 1.0).unwrap();
+            params.albedo_texture = albedo_texture;
+            params.thickness_texture = thickness_texture;
+            params.albedo_scale = albedo_scale;
+            let texture_error = |result: Result<(), ShadingError>| match result {
+                Err(e @ (ShadingError::Albedo { .. } | ShadingError::Thickness { .. })) => Err(e),
+                _ => Ok(()),
+            };
+            prop_assert_eq!(
+                format!("{:?}", texture_error(params.validate())),
+                format!("{:?}", texture_checks_texel_by_texel(&params))
+            );
+            // The table's τ1 range against the half floats of every texel.
+            let range = (table_min, table_min * table_span);
+            let (low, high) = match &params.thickness_texture {
+                Some(texture) => texture.texels.iter().fold((f64::MAX, f64::MIN), |(lo, hi), t| {
+                    let v = f64::from(crate::render::quantize_to_half(t[0]));
+                    (lo.min(v), hi.max(v))
+                }),
+                None => (1.0, 1.0),
+            };
+            let outside = params.optical_thickness.iter().any(|&tau| {
+                [f64::from(tau) * low, f64::from(tau) * high].iter().any(|&value| {
+                    value < range.0 * (1.0 - TABLE_RANGE_SLACK)
+                        || value > range.1 * (1.0 + TABLE_RANGE_SLACK)
+                })
+            });
+            prop_assert_eq!(params.validate_table_range(range).is_err(), outside);
+        }
+    }
+
+    #[test]
+    fn a_clone_of_a_texture_shares_its_texels_and_equals_it() {
+        let texture = Texture2d::new(2, 1, vec![[0.25, 0.5, 0.75, 1.0], [1.0; 4]]).unwrap();
+        let clone = texture.clone();
+        assert!(Arc::ptr_eq(&texture.texels, &clone.texels));
+        assert_eq!(texture, clone);
+        let same_values = Texture2d::new(2, 1, texture.texels().to_vec()).unwrap();
+        assert!(!Arc::ptr_eq(&texture.texels, &same_values.texels));
+        assert_eq!(texture, same_values);
+        let other = Texture2d::new(2, 1, vec![[0.25, 0.5, 0.75, 1.0], [0.5; 4]]).unwrap();
+        assert_ne!(texture, other);
+        assert_ne!(
+            texture,
+            Texture2d::new(1, 2, texture.texels().to_vec()).unwrap()
+        );
+    }
 
     #[test]
     fn srgb_endpoints_and_midpoint() {
