@@ -250,6 +250,31 @@ impl TargetFormat {
     }
 }
 
+/// Appends the texels of `bytes`, little-endian RGBA f32 as the GPU wrote them: on a little-endian
+/// host whose bytes are 4-byte aligned (wgpu aligns a mapping to 8, and rows to 256) a cast of the
+/// whole row, else texel by texel.
+fn extend_with_f32_texels(pixels: &mut Vec<[f32; 4]>, bytes: &[u8]) {
+    match bytemuck::try_cast_slice::<u8, [f32; 4]>(bytes) {
+        Ok(texels) if cfg!(target_endian = "little") => pixels.extend_from_slice(texels),
+        _ => pixels.extend(bytes.chunks_exact(16).map(|texel| {
+            std::array::from_fn(|channel| {
+                let at = 4 * channel;
+                f32::from_le_bytes([texel[at], texel[at + 1], texel[at + 2], texel[at + 3]])
+            })
+        })),
+    }
+}
+
+/// Appends the texels of `bytes`, little-endian RGBA IEEE half floats, as f32.
+fn extend_with_f16_texels(pixels: &mut Vec<[f32; 4]>, bytes: &[u8]) {
+    pixels.extend(bytes.chunks_exact(8).map(|texel| {
+        std::array::from_fn(|channel| {
+            let at = 2 * channel;
+            f16_bits_to_f32(u16::from_le_bytes([texel[at], texel[at + 1]]))
+        })
+    }));
+}
+
 /// The first channel of `pixels` that overflowed a target of `format` — NaN, infinite, or at the
 /// format's largest finite magnitude — as (pixel index, value).
 fn first_overflowed_channel(pixels: &[[f32; 4]], format: TargetFormat) -> Option<(usize, f32)> {
@@ -920,37 +945,23 @@ impl HeadlessRenderer {
             },
         );
         self.queue.submit([encoder.finish()]);
-        let data = self.map_and_read(&self.readback)?;
-        let mut pixels = Vec::with_capacity((self.width * self.height) as usize);
-        {
-            for row in 0..self.height as usize {
-                let start = row * self.padded_row_bytes as usize;
-                match self.target_format {
+        let (width, height) = (self.width as usize, self.height as usize);
+        let (format, row_stride) = (self.target_format, self.padded_row_bytes as usize);
+        let pixels = self.map_and_read(&self.readback, |data| {
+            let mut pixels = Vec::with_capacity(width * height);
+            for row in 0..height {
+                let start = row * row_stride;
+                match format {
                     TargetFormat::Rgba32Float => {
-                        let bytes = &data[start..start + self.width as usize * 16];
-                        pixels.extend(bytes.chunks_exact(16).map(|texel| {
-                            let mut value = [0.0f32; 4];
-                            for (channel, chunk) in value.iter_mut().zip(texel.chunks_exact(4)) {
-                                *channel =
-                                    f32::from_le_bytes([chunk[0], chunk[1], chunk[2], chunk[3]]);
-                            }
-                            value
-                        }));
+                        extend_with_f32_texels(&mut pixels, &data[start..start + width * 16]);
                     }
                     TargetFormat::Rgba16Float => {
-                        let bytes = &data[start..start + self.width as usize * 8];
-                        pixels.extend(bytes.chunks_exact(8).map(|texel| {
-                            let mut value = [0.0f32; 4];
-                            for (channel, chunk) in value.iter_mut().zip(texel.chunks_exact(2)) {
-                                *channel =
-                                    f16_bits_to_f32(u16::from_le_bytes([chunk[0], chunk[1]]));
-                            }
-                            value
-                        }));
+                        extend_with_f16_texels(&mut pixels, &data[start..start + width * 8]);
                     }
                 }
             }
-        }
+            pixels
+        })?;
         if let Some((index, value)) = first_overflowed_channel(&pixels, self.target_format) {
             return Err(RenderError::OverflowedPixel {
                 x: index as u32 % self.width,
@@ -1090,11 +1101,16 @@ impl HeadlessRenderer {
         }
         encoder.copy_buffer_to_buffer(&output_buffer, 0, &readback, 0, size);
         self.queue.submit([encoder.finish()]);
-        let bytes = self.map_and_read(&readback)?;
-        Ok(bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes))
+        self.map_and_read(&readback, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>)
     }
 
-    fn map_and_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+    /// Maps `buffer`, hands its bytes to `read` in place (no copy of the whole buffer first) and unmaps
+    /// it.
+    fn map_and_read<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, RenderError> {
         let slice = buffer.slice(..);
         let status = Arc::new(Mutex::new(None));
         let status_sink = Arc::clone(&status);
@@ -1112,13 +1128,15 @@ impl HeadlessRenderer {
             Some(Err(error)) => return Err(RenderError::Gpu(format!("mapping a buffer: {error}"))),
             None => return Err(RenderError::Gpu("buffer never mapped".into())),
         }
-        let bytes = slice
-            .get_mapped_range()
-            .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?
-            .to_vec();
+        let value = {
+            let bytes = slice
+                .get_mapped_range()
+                .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?;
+            read(&bytes)
+        };
         buffer.unmap();
         self.take_uncaptured()?;
-        Ok(bytes)
+        Ok(value)
     }
 
     fn take_uncaptured(&self) -> Result<(), RenderError> {
@@ -1745,6 +1763,45 @@ mod tests {
                 other => panic!("{list:?}: expected UnknownBackend, got {other:?}"),
             }
         }
+    }
+
+    /// A row read back as a cast and texel by texel (the fallback for an unaligned mapping) gives the
+    /// same texels, bit for bit, NaN and infinities included; half floats likewise.
+    #[test]
+    fn read_back_rows_give_the_texels_aligned_or_not() {
+        let texels: Vec<[f32; 4]> = vec![
+            [0.0, -0.0, 1.5, -2.25],
+            [f32::MAX, f32::MIN_POSITIVE, 1e-45, f32::INFINITY],
+            [f32::NAN, 3.0e38, -7.0, 0.1],
+        ];
+        let bytes: Vec<u8> = texels
+            .iter()
+            .flatten()
+            .flat_map(|value| value.to_le_bytes())
+            .collect();
+        let bits = |pixels: &[[f32; 4]]| -> Vec<u32> {
+            pixels.iter().flatten().map(|v| v.to_bits()).collect()
+        };
+        // One byte in, so that at least one of the two slices is not 4-byte aligned.
+        let mut shifted = vec![0u8];
+        shifted.extend_from_slice(&bytes);
+        for slice in [&bytes[..], &shifted[1..]] {
+            let mut pixels = Vec::new();
+            extend_with_f32_texels(&mut pixels, slice);
+            assert_eq!(bits(&pixels), bits(&texels));
+        }
+        let halves: Vec<u8> = texels
+            .iter()
+            .flatten()
+            .flat_map(|&value| f32_to_f16_bits(value).to_le_bytes())
+            .collect();
+        let mut pixels = Vec::new();
+        extend_with_f16_texels(&mut pixels, &halves);
+        let expected: Vec<[f32; 4]> = texels
+            .iter()
+            .map(|texel| texel.map(quantize_to_half))
+            .collect();
+        assert_eq!(bits(&pixels), bits(&expected));
     }
 
     /// An overflow reads back as infinity on lavapipe but as `f32::MAX` on NVIDIA's Vulkan driver
