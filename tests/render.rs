@@ -1,5 +1,6 @@
 //! Workspace-level, headless on Mesa lavapipe/llvmpipe: the paper's figure 2, a default-scene frame,
-//! a static sheet checked against the model by hand, and the `sheer slab` command.
+//! a static sheet checked against the model by hand, the `sheer slab` command, and `sheer bench
+//! render`'s CSV.
 
 use std::path::{Path, PathBuf};
 
@@ -515,4 +516,54 @@ fn output_that_cannot_be_written_is_a_one_line_error() {
         .unwrap();
     one_line_error(&out, "cannot write to standard output");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `sheer bench render --csv` prints its documented header and one row per case; every time is finite
+/// and non-negative, the GPU's part of the shading stage is no more than the stage, and only the
+/// all-orders cases have a ratio to single scattering.
+#[test]
+fn bench_render_prints_the_documented_csv() {
+    let out = sheer_ok(&["bench", "render", "--seconds", "0", "--csv"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "path,width,height,fps,ratio_to_baseline,ratio_to_single,simulation_ms,normals_ms,\
+             shading_gpu_ms,gpu_ms,readback_ms"
+        )
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|line| line.split(',').collect()).collect();
+    let names: Vec<&str> = rows.iter().map(|row| row[0]).collect();
+    assert_eq!(
+        names,
+        [
+            "fragment",
+            "fragment/all-orders",
+            "fragment/all-orders/table@vertex",
+            "vertex",
+            "vertex/all-orders",
+            "cpu",
+            "cpu/all-orders",
+            "baseline"
+        ],
+        "{text}"
+    );
+    for row in &rows {
+        assert_eq!(row.len(), 11, "{text}");
+        assert_eq!(row[1..3], ["512", "512"], "{text}");
+        let number = |column: usize| -> f64 {
+            let value: f64 = row[column].parse().expect("a number");
+            assert!(value.is_finite() && value >= 0.0, "{text}");
+            value
+        };
+        assert!(number(3) > 0.0 && number(4) > 0.0, "{text}");
+        let [_, _, shading, gpu, _] = [6, 7, 8, 9, 10].map(number);
+        assert!(gpu <= shading, "{text}");
+        assert_eq!(row[5].is_empty(), !row[0].contains("all-orders"), "{text}");
+        if !row[5].is_empty() {
+            assert!(number(5) > 0.0, "{text}");
+        }
+    }
+    assert_eq!(rows[7][4], "1.000", "the baseline against itself: {text}");
 }
