@@ -341,11 +341,12 @@ impl Texture2d {
                 texels: texels.len(),
             });
         }
-        if let Some(index) = texels.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
-            return Err(ShadingError::NonFiniteTexel { index });
-        }
+        // One pass: the first non-finite texel, else each channel's extremes.
         let (mut channel_min, mut channel_max) = ([f32::INFINITY; 4], [f32::NEG_INFINITY; 4]);
-        for texel in &texels {
+        for (index, texel) in texels.iter().enumerate() {
+            if texel.iter().any(|c| !c.is_finite()) {
+                return Err(ShadingError::NonFiniteTexel { index });
+            }
             for channel in 0..4 {
                 channel_min[channel] = channel_min[channel].min(texel[channel]);
                 channel_max[channel] = channel_max[channel].max(texel[channel]);
