@@ -12,8 +12,8 @@
 //! several to a pass, or on a team as a chain of such passes on its threads
 //! ([`Wavefront::run_link`]). In parallel, a grid's passes go to the simulation's team
 //! of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in equal parts (a cloth
-//! below 16 384 particles), a grid's whole sub-step is one hand-off, each thread on its own rows
-//! ([`Pipeline`]).
+//! below 86 016 particles), a grid's whole sub-step, or whole step, is one hand-off, each thread on its
+//! own rows ([`Pipeline`]).
 //!
 //! Throughout a step the state is split by component (`Simulation::split_positions`, …;
 //! `components.rs`): every loop here reads and writes x, y and z as three plain arrays.
@@ -543,20 +543,17 @@ impl Simulation {
         };
         let multipliers = iterations > 1 && pbd_stiffness.is_none();
         let small = self.positions.len() < WHOLE_STEP_WAVEFRONT_MIN_PARTICLES;
-        // A small grid's step as one pass of a team; a large grid's as wavefronts of several sub-steps.
+        // The step as one pass of a team in equal parts (a cloth below `TEAM_CLAIMS_FROM_PARTICLES`);
+        // else, from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps.
         let pipeline = self.parallel()
             && team_in_equal_parts().is_some()
-            && match self.grid_sweep {
-                GridSweep::Pipeline => true,
-                GridSweep::Auto => small,
-                _ => false,
-            };
+            && matches!(self.grid_sweep, GridSweep::Pipeline | GridSweep::Auto);
         let wavefront = match self.grid_sweep {
             GridSweep::Wavefront {
                 substeps_per_pass, ..
             } => substeps_per_pass > 0,
             GridSweep::Chain { .. } => true,
-            GridSweep::Auto => !small,
+            GridSweep::Auto => !small && !pipeline,
             _ => false,
         };
         let eligible = !multipliers
@@ -977,7 +974,11 @@ impl Simulation {
                 GridSweep::Chain { substeps_per_link } => (1, Some(substeps_per_link), true),
                 // Once the cloth outgrows the caches (and, below, in parts only when the seams, which
                 // run on one thread each, are a small share of the rows).
-                GridSweep::Auto if inverse_masses.len() < wavefront_min_particles => {
+                // A team in equal parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES`).
+                GridSweep::Auto
+                    if inverse_masses.len() < wavefront_min_particles
+                        || (parallel && team_in_equal_parts().is_some()) =>
+                {
                     break 'plan None;
                 }
                 GridSweep::Auto => (threads, None, false),
@@ -2336,6 +2337,50 @@ mod tests {
                     (_, None) => assert_eq!((per_pass, in_chain), (0, false), "{what}"),
                 }
             }
+        }
+    }
+
+    /// Left to choose, a grid from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` up to
+    /// `TEAM_CLAIMS_FROM_PARTICLES` (256 × 288) takes several sub-steps a pass on one thread, and on a
+    /// team, whose threads then keep their own rows, goes as one pass of the pipeline instead of
+    /// wavefronts; the bits are those of pass by pass either way.
+    #[test]
+    fn left_to_choose_a_team_in_equal_parts_runs_a_large_grid_as_the_pipeline() {
+        use crate::sim::{GridSweep, TEAM_CLAIMS_FROM_PARTICLES};
+        let method = Method::SmallStepsXpbd { substeps: 20 };
+        let (columns, rows) = (256, 288);
+        assert!(
+            (super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES..TEAM_CLAIMS_FROM_PARTICLES)
+                .contains(&(columns * rows))
+        );
+        let run = |sweep: GridSweep, threads: usize| {
+            let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
+            sim.params.wind.renewal_interval = held_for(2, method);
+            sim.grid_sweep = sweep;
+            turning_pole(&mut sim, threads, 2);
+            let run = (
+                sim.wavefront_substeps_per_pass,
+                sim.pipeline_plan
+                    .plan
+                    .as_ref()
+                    .map(|plan| plan.pipeline.parts()),
+            );
+            (state_bits(&sim), run)
+        };
+        let (passes, _) = run(GridSweep::Passes, 1);
+        let most = super::substeps_in_flight(columns, 12, 20);
+        for threads in [1, 2, 3] {
+            let (bits, how) = run(GridSweep::Auto, threads);
+            assert!(
+                bits == passes,
+                "{threads} threads: not the bits of pass by pass"
+            );
+            let expected = if threads == 1 {
+                (most, None)
+            } else {
+                (0, Some(threads))
+            };
+            assert_eq!(how, expected, "{threads} threads");
         }
     }
 

@@ -102,8 +102,13 @@ pub(crate) struct CgScratch {
     pub spring_terms: Vec<DVec3>,
 }
 
-/// Particle count from which a team claims its passes chunk by chunk ([`TeamSlot::lead`]).
-const TEAM_CLAIMS_FROM_PARTICLES: usize = 16_384;
+/// Particle count from which a team claims its passes chunk by chunk ([`TeamSlot::lead`]); below it
+/// each thread keeps its own part of the cloth, and a grid's position-based step runs as one pass of
+/// the pipeline. On two threads the pipeline took 0.76–0.87× the time (medians of interleaved rounds) of
+/// claimed passes or of a chain of wavefronts from 128 × 128 to 288 × 288 (82 944 particles), and
+/// 1.03–1.21× from 300 × 300 (90 000) on (crate README, "Each thread on its own rows up to 86 016
+/// particles").
+pub(crate) const TEAM_CLAIMS_FROM_PARTICLES: usize = 86_016;
 
 /// A running cloth simulation. Build it from a [`ClothModel`] and [`SimParams`], then call
 /// [`step`](Simulation::step).
@@ -471,8 +476,9 @@ impl Simulation {
             self.split_velocities.split_from(&self.velocities);
         }
         let mut team = std::mem::take(&mut self.team);
-        // From about 16 k particles (about 150 bytes each) a grid's data outgrows a core's cache, and the
-        // team's passes are claimed chunk by chunk instead of split in equal parts.
+        // Each thread keeps its own rows, in its core's caches, while the cloth is small enough for that
+        // to pay (measured: `TEAM_CLAIMS_FROM_PARTICLES`); beyond that the team's passes are claimed
+        // chunk by chunk, since one core may run slower than the other.
         let claim = self.positions.len() >= TEAM_CLAIMS_FROM_PARTICLES;
         let divergence = team.lead(team_threads, claim, || {
             // A grid's position-based step as one pass of the team, or as wavefronts of several

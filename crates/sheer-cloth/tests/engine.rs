@@ -84,37 +84,55 @@ fn identical_bits_on_one_two_and_four_threads() {
 }
 
 #[test]
-fn identical_bits_on_a_grid_long_enough_for_claimed_chunks() {
-    // 60 × 300 particles: enough for a team of two or three to claim its passes chunk by chunk instead
-    // of splitting them in equal parts.
-    let spec = GridSpec {
-        columns: 60,
-        rows: 300,
-        width: 0.6,
-        height: 3.0,
-        ..GridSpec::default()
-    };
-    let run = |threads: usize, parallel_min_particles: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let mut params = SimParams {
-                parallel_min_particles,
-                ..SimParams::default()
+fn identical_bits_on_grids_in_equal_parts_and_in_claimed_chunks() {
+    // 60 × 300 particles: a team keeps its threads on their own rows (the pipeline of a whole step);
+    // 60 × 1 440 (86 400): past 86 016 particles a team claims its passes chunk by chunk instead, and a
+    // whole step goes as a chain of wavefronts. XPBD with three iterations keeps multipliers, so it goes
+    // sub-step by sub-step: the pipeline of a sub-step, and passes claimed chunk by chunk.
+    let methods = [
+        SimParams::default().method,
+        Method::Xpbd {
+            substeps: 4,
+            iterations: 3,
+        },
+    ];
+    for rows in [300, 1440] {
+        let spec = GridSpec {
+            columns: 60,
+            rows,
+            width: 0.6,
+            height: rows as f64 / 100.0,
+            ..GridSpec::default()
+        };
+        for method in methods {
+            let run = |threads: usize, parallel_min_particles: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let mut params = SimParams {
+                        method,
+                        parallel_min_particles,
+                        ..SimParams::default()
+                    };
+                    params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
+                    let mut sim = hoist_pinned(&spec, params);
+                    for _ in 0..3 {
+                        sim.step(1.0 / 60.0).unwrap();
+                    }
+                    bits(&sim)
+                })
             };
-            params.wind.velocity = DVec3::new(6.0, 0.0, 1.5);
-            let mut sim = hoist_pinned(&spec, params);
-            for _ in 0..3 {
-                sim.step(1.0 / 60.0).unwrap();
+            let reference = run(1, usize::MAX);
+            for threads in [2, 3] {
+                assert!(
+                    run(threads, 0) == reference,
+                    "{} on 60 × {rows}: {threads} threads differ",
+                    method.name()
+                );
             }
-            bits(&sim)
-        })
-    };
-    let reference = run(1, usize::MAX);
-    for threads in [2, 3] {
-        assert!(run(threads, 0) == reference, "{threads} threads differ");
+        }
     }
 }
 
