@@ -43,6 +43,15 @@ fn windy_flag(method: Method, parallel_min_particles: usize) -> Simulation {
     hoist_pinned(&GridSpec::default(), params)
 }
 
+/// `work` run on a rayon pool of `threads` threads.
+fn on_threads<R: Send>(threads: usize, work: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(work)
+}
+
 fn bits(sim: &Simulation) -> Vec<[u64; 3]> {
     sim.positions()
         .iter()
@@ -60,11 +69,7 @@ fn identical_bits_on_one_two_and_four_threads() {
             10
         };
         let run = |threads: usize, parallel_min_particles: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            on_threads(threads, || {
                 let mut sim = windy_flag(method, parallel_min_particles);
                 // Every step's outcome (a divergence included) must be identical too.
                 let outcome: Vec<_> = (0..frames).map(|_| sim.step(1.0 / 60.0).is_ok()).collect();
@@ -106,11 +111,7 @@ fn identical_bits_on_grids_in_equal_parts_and_in_claimed_chunks() {
         };
         for method in methods {
             let run = |threads: usize, parallel_min_particles: usize| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                pool.install(|| {
+                on_threads(threads, || {
                     let mut params = SimParams {
                         method,
                         parallel_min_particles,
