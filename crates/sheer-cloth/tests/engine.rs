@@ -264,6 +264,59 @@ fn small_steps_xpbd_stretches_more_on_wider_flags_until_they_diverge() {
 }
 
 #[test]
+fn pbd_and_xpbd_at_their_flag_settings_stretch_more_on_wider_flags_until_they_diverge() {
+    // The same failure region for the other position-based methods at their stable settings on the
+    // default flag (crate README, "Known failure regions"), in the default flag's wind: PBD 4 × 10
+    // stretches to 0.26, 0.99 and 3.9 over the first 30 frames at 64, 128 and 256 columns, and
+    // diverges at 256 (frame 47); XPBD 2 × 20 to 0.19, 0.52, 2.4 and 4.5 at 64 to 512 columns, and
+    // diverges at 512 (frame 40).
+    // The largest stretch strain over the first 30 frames, and the frame that diverged within 60.
+    let run = |method: Method, columns: usize| -> (f64, Option<usize>) {
+        let spec = GridSpec {
+            columns,
+            ..GridSpec::default()
+        };
+        let params = SimParams {
+            method,
+            ..SimParams::waving_flag()
+        };
+        let mut sim = hoist_pinned(&spec, params);
+        let mut largest: f64 = 0.0;
+        for frame in 0..60 {
+            match sim.step(1.0 / 60.0) {
+                Err(StepError::Diverged { .. }) => return (largest, Some(frame)),
+                Err(other) => panic!("{other}"),
+                Ok(_) if frame < 30 => {
+                    largest = largest.max(sim.max_strain(Some(SpringKind::Stretch)));
+                }
+                Ok(_) => {}
+            }
+        }
+        (largest, None)
+    };
+    for (name, diverging_columns) in [("pbd", 256), ("xpbd", 512)] {
+        let method = Method::stable_flag_setting(name).unwrap();
+        let mut columns = 64;
+        let mut previous = run(method, columns).0;
+        assert!(previous < 0.3, "{name}: {previous} at 64 columns");
+        while columns < diverging_columns {
+            columns *= 2;
+            let (stretch, diverged) = run(method, columns);
+            assert!(
+                stretch > 1.8 * previous,
+                "{name}: {previous} → {stretch} at {columns}"
+            );
+            assert_eq!(
+                diverged.is_some(),
+                columns == diverging_columns,
+                "{name} at {columns} columns: {diverged:?}"
+            );
+            previous = stretch;
+        }
+    }
+}
+
+#[test]
 fn wind_updated_every_few_sub_steps_lies_between_every_sub_step_and_once_per_frame() {
     // Holding the wind for a whole frame's sub-steps (the default method's count) is exactly holding it
     // for the frame, bit for bit; held for two sub-steps it is neither that nor every sub-step (the
