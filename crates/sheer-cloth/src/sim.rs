@@ -219,12 +219,13 @@ pub(crate) struct RowForces {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
-    /// A whole step as wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`
-    /// (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, as a chain of them where its links
-    /// hold more sub-steps than passes in parts would, and only where passes in parts fit), a sub-step
-    /// as one wavefront from
-    /// `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows per thread for the seams:
-    /// `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
+    /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES`), the pipeline: a whole step, or
+    /// sub-step by sub-step, as one hand-off. Else a whole step as wavefronts of several sub-steps a pass
+    /// from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds; on a
+    /// team, as a chain of them where its links hold more sub-steps than passes in parts would, and only
+    /// where passes in parts fit), a sub-step as one wavefront from `WAVEFRONT_MIN_PARTICLES` (on several
+    /// threads only with enough rows per thread for the seams: `…_ROWS_PER_DEPTH` times the depth); else
+    /// pass by pass.
     #[default]
     Auto,
     /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
