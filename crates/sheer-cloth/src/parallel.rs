@@ -156,7 +156,7 @@ impl Team {
     ///
     /// A small cloth's pass is split into one equal part per thread, so that each thread keeps working
     /// on the same particles, in its own core's cache, pass after pass. A large cloth's pass (see
-    /// [`TeamSlot::lead`]) is claimed in chunks of `grain` instead: its data does not fit a core's cache
+    /// [`TeamSlot::lead`]) is claimed in chunks of `grain` instead: its data outgrows the caches
     /// anyway, and on a shared machine one core may run slower than the other, which equal parts would
     /// wait for.
     fn run(&self, len: usize, grain: usize, work: &Work<'_>) {

@@ -507,11 +507,12 @@ unsafe fn end_sweep(
 
 impl Simulation {
     /// Runs a whole step of `substeps` sub-steps of `h` (s) from time `time` (s) in passes over the rows,
-    /// with the pins prescribed and placed row by row inside them, and returns whether it did: a small
-    /// grid's as one pipelined pass of the team, a large grid's as wavefronts of several sub-steps a
-    /// pass (on any number of threads). When it did not (a method with multipliers, a mesh, a small grid
-    /// without a team in equal parts, a cloth too short for its parts, attachments reaching too far for
-    /// the prediction to join the wavefront, …) nothing has changed and the caller steps sub-step by
+    /// with the pins prescribed and placed row by row inside them, and returns whether it did: on a team
+    /// in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES`) as one pipelined pass of the team; else, from
+    /// `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps a pass (on one thread, or
+    /// on a team that claims its passes). When it did not (a method with multipliers, a mesh, a small
+    /// grid without a team in equal parts, a cloth too short for its parts, attachments reaching too far
+    /// for the prediction to join the wavefront, …) nothing has changed and the caller steps sub-step by
     /// sub-step.
     ///
     /// Sub-step by sub-step, each sub-step is one pass, ended by a barrier at which the leader waits for
@@ -524,8 +525,8 @@ impl Simulation {
     /// A large grid's whole step goes as wavefronts instead ([`Wavefront`]), each pass running as many
     /// sub-steps one behind the other as keep the rows in flight within [`WAVEFRONT_WINDOW_BYTES`]:
     /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
-    /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass"). On a team of
-    /// threads the passes go either in parts (the rows cut between the threads, the seams around the
+    /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass"). On a team
+    /// that claims its passes they go either in parts (the rows cut between the threads, the seams around the
     /// cuts after them) or as a chain, one pass (*link*) per thread at a time, each following the one
     /// before down the rows ([`Wavefront::run_link`]): the chain where its links hold more sub-steps
     /// than the parts' passes could, the seams needing rows, and only where passes in parts fit (else
@@ -2340,10 +2341,10 @@ mod tests {
         }
     }
 
-    /// Left to choose, a grid from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` up to
-    /// `TEAM_CLAIMS_FROM_PARTICLES` (256 × 288) takes several sub-steps a pass on one thread, and on a
-    /// team, whose threads then keep their own rows, goes as one pass of the pipeline instead of
-    /// wavefronts; the bits are those of pass by pass either way.
+    /// Left to choose, a grid (256 × 288) from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` up to
+    /// `TEAM_CLAIMS_FROM_PARTICLES` takes several sub-steps a pass on one thread, and on a team, whose
+    /// threads then keep their own rows, goes as one pass of the pipeline for the whole step (its plan
+    /// holding all 20 sub-steps) instead of wavefronts; the bits are those of pass by pass either way.
     #[test]
     fn left_to_choose_a_team_in_equal_parts_runs_a_large_grid_as_the_pipeline() {
         use crate::sim::{GridSweep, TEAM_CLAIMS_FROM_PARTICLES};
@@ -2364,6 +2365,8 @@ mod tests {
                     .plan
                     .as_ref()
                     .map(|plan| plan.pipeline.parts()),
+                // The sub-steps the pipeline's plan was made for (its renewals, one a sub-step).
+                sim.pipeline_plan.key.as_ref().map(|key| key.0.len()),
             );
             (state_bits(&sim), run)
         };
@@ -2376,9 +2379,9 @@ mod tests {
                 "{threads} threads: not the bits of pass by pass"
             );
             let expected = if threads == 1 {
-                (most, None)
+                (most, None, None)
             } else {
-                (0, Some(threads))
+                (0, Some(threads), Some(20))
             };
             assert_eq!(how, expected, "{threads} threads");
         }
@@ -2568,9 +2571,10 @@ mod tests {
 
     /// The pipelined sub-step (each thread of a team on its own rows, one hand-off per sub-step) gives
     /// the bits of pass by pass: for small-steps XPBD, XPBD with several sweeps and PBD; on teams of two
-    /// to four threads; with the wind renewed every sub-step, held for three, and without wind; with
-    /// the long-range attachments and a turning pole. The cuts move between sub-steps as the parts'
-    /// times differ, so the runs also cover several cuts.
+    /// to four threads; with the wind renewed every sub-step (its forces from the grid's rows and from
+    /// the general triangle path), held for three, and without wind; with the long-range attachments and
+    /// a turning pole. The cuts move between sub-steps as the parts' times differ, so the runs also cover
+    /// several cuts.
     #[test]
     fn the_pipeline_gives_the_bits_of_pass_by_pass() {
         use crate::sim::GridSweep;
@@ -2586,16 +2590,25 @@ mod tests {
                 stiffness: 1.0,
             },
         ];
-        // (wind speed, sub-steps per renewal): renewed every sub-step, held, none.
-        let winds = [(6.0, 1), (6.0, 3), (0.0, 1)];
+        // (wind speed, sub-steps per renewal, the general triangle path): renewed every sub-step by rows
+        // and by triangles, held, none.
+        let winds = [
+            (6.0, 1, false),
+            (6.0, 1, true),
+            (6.0, 3, false),
+            (0.0, 1, false),
+        ];
         for method in methods {
-            for (speed, interval) in winds {
+            for (speed, interval, general) in winds {
                 // `threads` > 1: on a pool of that many threads, the parallel code paths forced on.
                 let run = |sweep: GridSweep, threads: usize| {
                     let height = GridSpec::default().height;
                     let mut sim = windy_flag(21, 29, height, method, threads > 1);
                     sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
                     sim.params.wind.renewal_interval = held_for(interval, method);
+                    if general {
+                        sim.grid_triangulation = None; // summed into `forces` by the general path
+                    }
                     sim.grid_sweep = sweep;
                     turning_pole_bits(sim, threads, 15)
                 };
@@ -2604,8 +2617,8 @@ mod tests {
                     assert_eq!(
                         passes,
                         run(GridSweep::Pipeline, threads),
-                        "{method:?}, wind {speed} m/s every {interval}: the pipeline on {threads} \
-                         threads"
+                        "{method:?}, wind {speed} m/s every {interval} (general {general}): the \
+                         pipeline on {threads} threads"
                     );
                 }
                 // Left to choose, a team on this small grid takes the pipeline: the same bits.

@@ -91,8 +91,8 @@ fn identical_bits_on_one_two_and_four_threads() {
 #[test]
 fn identical_bits_on_grids_in_equal_parts_and_in_claimed_chunks() {
     // 60 × 300 particles: a team keeps its threads on their own rows (the pipeline of a whole step);
-    // 60 × 1 440 (86 400): past 86 016 particles a team claims its passes chunk by chunk instead, and a
-    // whole step goes as a chain of wavefronts. XPBD with three iterations keeps multipliers, so it goes
+    // 60 × 2 000 (120 000): well past 86 016 particles a team claims its passes chunk by chunk instead,
+    // and a whole step goes as a chain of wavefronts. XPBD with three iterations keeps multipliers, so it goes
     // sub-step by sub-step: the pipeline of a sub-step, and passes claimed chunk by chunk.
     let methods = [
         SimParams::default().method,
@@ -101,7 +101,7 @@ fn identical_bits_on_grids_in_equal_parts_and_in_claimed_chunks() {
             iterations: 3,
         },
     ];
-    for rows in [300, 1440] {
+    for rows in [300, 2000] {
         let spec = GridSpec {
             columns: 60,
             rows,
@@ -268,8 +268,9 @@ fn pbd_and_xpbd_at_their_flag_settings_stretch_more_on_wider_flags_until_they_di
     // The same failure region for the other position-based methods at their stable settings on the
     // default flag (crate README, "Known failure regions"), in the default flag's wind: PBD 4 × 10
     // stretches to 0.26, 0.99 and 3.9 over the first 30 frames at 64, 128 and 256 columns, and
-    // diverges at 256 (frame 47); XPBD 2 × 20 to 0.19, 0.52, 2.4 and 4.5 at 64 to 512 columns, and
-    // diverges at 512 (frame 40).
+    // diverges at 256 (frame 47); XPBD 2 × 20 to 0.19, 0.52, 2.4 and 4.5 at 64, 128, 256 and 512
+    // columns, and diverges at 512 (frame 40). Each doubling of the columns stretches more than 1.6×
+    // (the least: XPBD 256 → 512, 1.83×).
     // The largest stretch strain over the first 30 frames, and the frame that diverged within 60.
     let run = |method: Method, columns: usize| -> (f64, Option<usize>) {
         let spec = GridSpec {
@@ -303,7 +304,7 @@ fn pbd_and_xpbd_at_their_flag_settings_stretch_more_on_wider_flags_until_they_di
             columns *= 2;
             let (stretch, diverged) = run(method, columns);
             assert!(
-                stretch > 1.8 * previous,
+                stretch > 1.6 * previous,
                 "{name}: {previous} → {stretch} at {columns}"
             );
             assert_eq!(
