@@ -43,6 +43,20 @@ fn windy_flag(method: Method, parallel_min_particles: usize) -> Simulation {
     hoist_pinned(&GridSpec::default(), params)
 }
 
+/// The default flag's scene (`SimParams::waving_flag`) on a grid of `columns` columns, hoist pinned,
+/// stepped with `method`.
+fn waving_flag_of_width(method: Method, columns: usize) -> Simulation {
+    let spec = GridSpec {
+        columns,
+        ..GridSpec::default()
+    };
+    let params = SimParams {
+        method,
+        ..SimParams::waving_flag()
+    };
+    hoist_pinned(&spec, params)
+}
+
 /// `work` run on a rayon pool of `threads` threads.
 fn on_threads<R: Send>(threads: usize, work: impl FnOnce() -> R + Send) -> R {
     rayon::ThreadPoolBuilder::new()
@@ -92,10 +106,10 @@ fn identical_bits_on_one_two_and_four_threads() {
 fn identical_bits_on_grids_in_equal_parts_and_in_claimed_chunks() {
     // 60 × 300 particles: a team keeps its threads on their own rows (the pipeline of a whole step);
     // 60 × 2 000 (120 000): well past 86 016 particles a team claims its passes chunk by chunk instead,
-    // and a whole step goes as a chain of wavefronts. XPBD with three iterations keeps multipliers, so it goes
-    // sub-step by sub-step: the pipeline of a sub-step, and passes claimed chunk by chunk.
+    // and a whole step goes as a chain of wavefronts. XPBD with three iterations keeps multipliers, so
+    // it goes sub-step by sub-step: the pipeline of a sub-step, and passes claimed chunk by chunk.
     let methods = [
-        SimParams::default().method,
+        Method::default(),
         Method::Xpbd {
             substeps: 4,
             iterations: 3,
@@ -235,15 +249,7 @@ fn small_steps_xpbd_stretches_more_on_wider_flags_until_they_diverge() {
     // 0.52 with 128, 1.14 with 256, 3.7 with 512; 1 024 columns reach 9.2 and diverge at frame 26 (a
     // spring past ten times its rest length).
     let largest_stretch = |columns: usize| -> Result<f64, StepError> {
-        let spec = GridSpec {
-            columns,
-            ..GridSpec::default()
-        };
-        let params = SimParams {
-            method: Method::SmallStepsXpbd { substeps: 20 },
-            ..SimParams::waving_flag()
-        };
-        let mut sim = hoist_pinned(&spec, params);
+        let mut sim = waving_flag_of_width(Method::SmallStepsXpbd { substeps: 20 }, columns);
         let mut largest: f64 = 0.0;
         for _ in 0..30 {
             sim.step(1.0 / 60.0)?;
@@ -273,15 +279,7 @@ fn pbd_and_xpbd_at_their_flag_settings_stretch_more_on_wider_flags_until_they_di
     // (the least: XPBD 256 → 512, 1.83×).
     // The largest stretch strain over the first 30 frames, and the frame that diverged within 60.
     let run = |method: Method, columns: usize| -> (f64, Option<usize>) {
-        let spec = GridSpec {
-            columns,
-            ..GridSpec::default()
-        };
-        let params = SimParams {
-            method,
-            ..SimParams::waving_flag()
-        };
-        let mut sim = hoist_pinned(&spec, params);
+        let mut sim = waving_flag_of_width(method, columns);
         let mut largest: f64 = 0.0;
         for frame in 0..60 {
             match sim.step(1.0 / 60.0) {
