@@ -526,11 +526,11 @@ impl Simulation {
     /// sub-steps one behind the other as keep the rows in flight within [`WAVEFRONT_WINDOW_BYTES`]:
     /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
     /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass"). On a team
-    /// that claims its passes they go either in parts (the rows cut between the threads, the seams around the
-    /// cuts after them) or as a chain, one pass (*link*) per thread at a time, each following the one
-    /// before down the rows ([`Wavefront::run_link`]): the chain where its links hold more sub-steps
-    /// than the parts' passes could, the seams needing rows, and only where passes in parts fit (else
-    /// sub-step by sub-step; crate README, "A chain of wavefronts").
+    /// that claims its passes they go either in parts (the rows cut between the threads, the seams
+    /// around the cuts after them) or as a chain, one pass (*link*) per thread at a time, each following
+    /// the one before down the rows ([`Wavefront::run_link`]): the chain where its links hold more
+    /// sub-steps than the parts' passes could, the seams needing rows, and only where passes in parts
+    /// fit (else sub-step by sub-step; crate README, "A chain of wavefronts").
     pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
         let (iterations, pbd_stiffness) = match self.params.method {
             Method::Pbd {
