@@ -14,6 +14,11 @@
 //! frames of warm-up. Copy this file into another checkout's `crates/sheer-cloth/examples/` to build
 //! the same program against another version of the library.
 //!
+//! `cargo run -p sheer-cloth --release --example fingerprint -- threads 1,2,4,8,16` runs the ways a step
+//! is shared out (teams in equal parts, claimed chains and parts, the triangle path; three methods) on
+//! each of those thread counts and exits non-zero unless every case gave the same bits on all of them:
+//! the determinism check for a machine with more cores than the tests' (1–4 threads).
+//!
 //! `cargo run -p sheer-cloth --release --example fingerprint -- together 64x46 400` says how much of two
 //! cores the machine gives right now: it times that setting on one thread alone, then two independent
 //! one-thread runs at the same time, then one alone again, and prints how many runs' work the two did
@@ -119,6 +124,78 @@ fn parse_case(grid: &str, count: &str, frames: &str) -> Option<((usize, usize), 
     Some(((columns, rows), count, frames))
 }
 
+/// Runs each case of `threads` on every count in `counts` (the parallel paths forced on from two) and
+/// prints its hashes; whether every case gave the same bits on all of them.
+///
+/// The cases reach each way a step is shared out, on two threads: a team in equal parts (the default
+/// flag, and 288 × 288, below 43 008 particles a thread), chunks claimed from a chain of wavefronts
+/// (362 × 362) and from wavefronts in parts (1 024 × 745), and the general triangle path; for
+/// small-steps XPBD, XPBD with multipliers and PBD. More threads keep their own rows on larger grids
+/// (362 × 362 from four, 1 024 × 745 from eighteen).
+fn same_bits_on_thread_counts(counts: &[usize]) -> bool {
+    let small_steps = Method::SmallStepsXpbd { substeps: 20 };
+    let xpbd = Method::Xpbd {
+        substeps: 2,
+        iterations: 20,
+    };
+    let pbd = Method::Pbd {
+        substeps: 4,
+        iterations: 10,
+        stiffness: 1.0,
+    };
+    let cases = [
+        ((64, 46), small_steps, false, 60),
+        ((64, 46), xpbd, false, 60),
+        ((64, 46), pbd, false, 60),
+        ((64, 46), small_steps, true, 30),
+        ((288, 288), small_steps, false, 4),
+        ((288, 288), xpbd, false, 4),
+        ((362, 362), small_steps, false, 4),
+        ((362, 362), xpbd, false, 4),
+        ((1024, 745), small_steps, false, 2),
+    ];
+    let mut all_same = true;
+    for ((columns, rows), method, mesh, frames) in cases {
+        let hashes: Vec<u64> = counts
+            .iter()
+            .map(|&threads| {
+                fingerprint(threads, frames, || {
+                    let grid = grid(columns, rows);
+                    let mut model = if mesh {
+                        let indices = grid.triangle_indices();
+                        ClothModel::from_triangle_mesh(&grid.positions, &indices, 0.2)
+                            .expect("a valid mesh")
+                    } else {
+                        grid
+                    };
+                    let hoist: Vec<usize> = (0..rows).map(|row| row * columns).collect();
+                    model.pin(&hoist).expect("pins in range");
+                    flag(model, method, Some(1), threads)
+                })
+            })
+            .collect();
+        let same = hashes.iter().all(|&hash| hash == hashes[0]);
+        all_same &= same;
+        let shown: Vec<String> = hashes.iter().map(|hash| format!("{hash:016x}")).collect();
+        let path = if mesh { "triangle mesh" } else { "grid" };
+        println!(
+            "{columns}x{rows} {path} {} ({frames} frames) on {counts:?} threads: {} {}",
+            method.name(),
+            shown.join(" "),
+            if same { "same" } else { "DIFFERENT" }
+        );
+    }
+    println!(
+        "{}",
+        if all_same {
+            "same bits on every thread count"
+        } else {
+            "DIFFERENT bits between thread counts"
+        }
+    );
+    all_same
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
@@ -158,6 +235,22 @@ fn main() {
                 alone / first + alone / second
             );
             return;
+        }
+        Some("threads") => {
+            let counts: Option<Vec<usize>> = args.get(1).and_then(|list| {
+                list.split(',')
+                    .map(|n| n.parse::<usize>().ok().filter(|&n| n > 0))
+                    .collect()
+            });
+            let Some(counts) = counts.filter(|counts| counts.len() >= 2) else {
+                eprintln!("usage: fingerprint threads N,M,... (two or more thread counts)");
+                std::process::exit(2);
+            };
+            std::process::exit(if same_bits_on_thread_counts(&counts) {
+                0
+            } else {
+                1
+            });
         }
         Some("handoff") => {
             match sheer_cloth::thread_handoff_latency(Duration::from_millis(100)) {

@@ -12,7 +12,7 @@
 //! several to a pass, or on a team as a chain of such passes on its threads
 //! ([`Wavefront::run_link`]). In parallel, a grid's passes go to the simulation's team
 //! of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in equal parts (a cloth
-//! below 86 016 particles), a grid's whole sub-step, or whole step, is one hand-off, each thread on its
+//! below 43 008 particles a thread), a grid's whole sub-step, or whole step, is one hand-off, each thread on its
 //! own rows ([`Pipeline`]).
 //!
 //! Throughout a step the state is split by component (`Simulation::split_positions`, …;
@@ -508,7 +508,7 @@ unsafe fn end_sweep(
 impl Simulation {
     /// Runs a whole step of `substeps` sub-steps of `h` (s) from time `time` (s) in passes over the rows,
     /// with the pins prescribed and placed row by row inside them, and returns whether it did: on a team
-    /// in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES`) as one pipelined pass of the team; else, from
+    /// in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread) as one pipelined pass of the team; else, from
     /// `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps a pass (on one thread, or
     /// on a team that claims its passes). When it did not (a method with multipliers, a mesh, a small
     /// grid without a team in equal parts, a cloth too short for its parts, attachments reaching too far
@@ -544,7 +544,7 @@ impl Simulation {
         };
         let multipliers = iterations > 1 && pbd_stiffness.is_none();
         let small = self.positions.len() < WHOLE_STEP_WAVEFRONT_MIN_PARTICLES;
-        // The step as one pass of a team in equal parts (a cloth below `TEAM_CLAIMS_FROM_PARTICLES`);
+        // The step as one pass of a team in equal parts (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`);
         // else, from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps.
         let pipeline = self.parallel()
             && team_in_equal_parts().is_some()
@@ -933,8 +933,9 @@ impl Simulation {
             opening..batches.len() - closing,
             batches.len() - closing..batches.len(),
         );
+        // The team's threads where one leads (it may hold fewer than rayon's pool: `TEAM_ROWS_PER_THREAD`).
         let threads = if parallel {
-            rayon::current_num_threads()
+            team_threads().unwrap_or_else(rayon::current_num_threads)
         } else {
             1
         };
@@ -975,7 +976,7 @@ impl Simulation {
                 GridSweep::Chain { substeps_per_link } => (1, Some(substeps_per_link), true),
                 // Once the cloth outgrows the caches (and, below, in parts only when the seams, which
                 // run on one thread each, are a small share of the rows).
-                // A team in equal parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES`).
+                // A team in equal parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`).
                 GridSweep::Auto
                     if inverse_masses.len() < wavefront_min_particles
                         || (parallel && team_in_equal_parts().is_some()) =>
@@ -2295,22 +2296,27 @@ mod tests {
     /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a pass
     /// (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with the wind held
     /// for two sub-steps. On one thread in one part. On a team (whose threads claim the passes index by
-    /// index at these sizes) as a chain where its links hold more sub-steps than the passes in parts
-    /// would: 384 columns on two to four threads (links of four or five against passes of at most
-    /// two). Else in parts: 1 400 columns on two threads (one sub-step a pass either way); and sub-step
-    /// by sub-step where no pass fits the parts: 144 rows on three threads.
+    /// index at these sizes, `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`) as a chain where its links hold
+    /// more sub-steps than the passes in parts would: 384 columns on two to four threads (links of four
+    /// or five against passes of at most two; 288 rows on two, 456 on three and four, so that their
+    /// threads claim). Else in parts: 1 400 columns on two threads (one sub-step a pass either way); and
+    /// sub-step by sub-step where no pass fits the parts: 144 rows on three threads.
     #[test]
     fn left_to_choose_a_large_grid_takes_several_sub_steps_a_pass_with_the_same_bits() {
         use crate::sim::GridSweep;
         let method = Method::SmallStepsXpbd { substeps: 20 };
         // (columns, rows, threads, whether a team chains it: None where the step goes sub-step by sub-step).
         let cases = [
-            (384, 288, [1, 2, 3, 4].as_slice(), Some(true)),
+            (384, 288, [1, 2].as_slice(), Some(true)),
+            (384, 456, [3, 4].as_slice(), Some(true)),
             (1400, 144, [1, 2].as_slice(), Some(false)),
             (1400, 144, [3].as_slice(), None),
         ];
         for (columns, rows, thread_counts, chained) in cases {
             assert!(columns * rows >= super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES);
+            for &threads in thread_counts.iter().filter(|&&threads| threads > 1) {
+                assert!(crate::sim::team_claims_its_passes(columns * rows, threads));
+            }
             let run = |sweep: GridSweep, threads: usize| {
                 let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
                 sim.params.wind.renewal_interval = held_for(2, method);
@@ -2341,50 +2347,91 @@ mod tests {
         }
     }
 
-    /// Left to choose, a grid (256 × 288) from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` up to
-    /// `TEAM_CLAIMS_FROM_PARTICLES` takes several sub-steps a pass on one thread, and on a team, whose
-    /// threads then keep their own rows, goes as one pass of the pipeline for the whole step (its plan
-    /// holding all 20 sub-steps) instead of wavefronts; the bits are those of pass by pass either way.
+    /// Left to choose, a grid from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` on takes several sub-steps a
+    /// pass on one thread; on a team whose threads have fewer than `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`
+    /// particles each, and so keep their own rows, it goes as one pass of the pipeline for the whole step
+    /// (its plan holding all 20 sub-steps) instead of wavefronts; on a team with more, as wavefronts
+    /// claimed chunk by chunk. 256 × 288 (73 728 particles) runs the pipeline on two and three threads;
+    /// 256 × 400 (102 400) wavefronts on two and the pipeline on three, the count being per thread. The
+    /// bits are those of pass by pass every way.
     #[test]
     fn left_to_choose_a_team_in_equal_parts_runs_a_large_grid_as_the_pipeline() {
-        use crate::sim::{GridSweep, TEAM_CLAIMS_FROM_PARTICLES};
-        let method = Method::SmallStepsXpbd { substeps: 20 };
-        let (columns, rows) = (256, 288);
-        assert!(
-            (super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES..TEAM_CLAIMS_FROM_PARTICLES)
-                .contains(&(columns * rows))
-        );
-        let run = |sweep: GridSweep, threads: usize| {
-            let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
-            sim.params.wind.renewal_interval = held_for(2, method);
-            sim.grid_sweep = sweep;
-            turning_pole(&mut sim, threads, 2);
-            let run = (
-                sim.wavefront_substeps_per_pass,
-                sim.pipeline_plan
-                    .plan
-                    .as_ref()
-                    .map(|plan| plan.pipeline.parts()),
-                // The sub-steps the pipeline's plan was made for (its renewals, one a sub-step).
-                sim.pipeline_plan.key.as_ref().map(|key| key.0.len()),
-            );
-            (state_bits(&sim), run)
+        use crate::sim::{
+            GridSweep, TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD, team_claims_its_passes,
         };
-        let (passes, _) = run(GridSweep::Passes, 1);
-        let most = super::substeps_in_flight(columns, 12, 20);
-        for threads in [1, 2, 3] {
-            let (bits, how) = run(GridSweep::Auto, threads);
+        let method = Method::SmallStepsXpbd { substeps: 20 };
+        for (columns, rows) in [(256, 288), (256, 400)] {
+            let particles = columns * rows;
             assert!(
-                bits == passes,
-                "{threads} threads: not the bits of pass by pass"
+                (super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES
+                    ..3 * TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD)
+                    .contains(&particles)
             );
-            let expected = if threads == 1 {
-                (most, None, None)
-            } else {
-                (0, Some(threads), Some(20))
+            let run = |sweep: GridSweep, threads: usize| {
+                let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
+                sim.params.wind.renewal_interval = held_for(2, method);
+                sim.grid_sweep = sweep;
+                turning_pole(&mut sim, threads, 2);
+                let run = (
+                    sim.wavefront_substeps_per_pass,
+                    sim.pipeline_plan
+                        .plan
+                        .as_ref()
+                        .map(|plan| plan.pipeline.parts()),
+                    // The sub-steps the pipeline's plan was made for (its renewals, one a sub-step).
+                    sim.pipeline_plan.key.as_ref().map(|key| key.0.len()),
+                );
+                (state_bits(&sim), run)
             };
-            assert_eq!(how, expected, "{threads} threads");
+            let (passes, _) = run(GridSweep::Passes, 1);
+            let most = super::substeps_in_flight(columns, 12, 20);
+            for threads in [1, 2, 3] {
+                let (bits, how) = run(GridSweep::Auto, threads);
+                let what = format!("{columns} × {rows} on {threads} threads");
+                assert!(bits == passes, "{what}: not the bits of pass by pass");
+                if threads == 1 {
+                    assert_eq!(how, (most, None, None), "{what}");
+                } else if team_claims_its_passes(particles, threads) {
+                    assert!(how.0 > 1 && how.1.is_none(), "{what}: {how:?}");
+                } else {
+                    assert_eq!(how, (0, Some(threads), Some(20)), "{what}");
+                }
+            }
+            // Each grid's own case: 256 × 400 claims on two threads, 256 × 288 does not.
+            assert_eq!(team_claims_its_passes(particles, 2), rows == 400);
+            assert!(!team_claims_its_passes(particles, 3));
         }
+    }
+
+    /// A team takes no more threads than a quarter of the grid's rows (`TEAM_ROWS_PER_THREAD`), so that
+    /// the pipeline fits: the default flag's 46 rows on a pool of 16 threads run as the pipeline in 11
+    /// parts, where a team of 16 would step sub-step by sub-step; on 8, in 8. The bits are those of one
+    /// thread either way.
+    #[test]
+    fn a_team_takes_no_more_threads_than_the_rows_of_its_grid_allow() {
+        use crate::sim::team_threads_for_rows;
+        let method = Method::SmallStepsXpbd { substeps: 20 };
+        let (columns, rows) = (64, 46);
+        let run = |threads: usize| {
+            let mut sim = windy_flag(columns, rows, 0.8, method, threads > 1);
+            turning_pole(&mut sim, threads, 3);
+            let parts = sim
+                .pipeline_plan
+                .plan
+                .as_ref()
+                .map(|plan| plan.pipeline.parts());
+            (state_bits(&sim), parts)
+        };
+        let (serial, _) = run(1);
+        for (threads, parts) in [(16, 11), (8, 8)] {
+            assert_eq!(team_threads_for_rows(threads, rows), parts);
+            let (bits, how) = run(threads);
+            assert!(bits == serial, "{threads} threads: not the bits of one");
+            assert_eq!(how, Some(parts), "{threads} threads");
+        }
+        // At least two, however few the rows; never more than the pool.
+        assert_eq!(team_threads_for_rows(16, 5), 2);
+        assert_eq!(team_threads_for_rows(3, 1000), 3);
     }
 
     /// In a pass of several sub-steps the attachments of a sub-step (at the end of each of its sweeps)

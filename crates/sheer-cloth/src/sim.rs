@@ -102,13 +102,35 @@ pub(crate) struct CgScratch {
     pub spring_terms: Vec<DVec3>,
 }
 
-/// Particle count from which a team claims its passes chunk by chunk ([`TeamSlot::lead`]); below it
-/// each thread keeps its own part of the cloth, and a grid's position-based step runs as one pass of
-/// the pipeline. On two threads the pipeline took 0.76–0.87× the time (medians of interleaved rounds) of
-/// claimed passes or of a chain of wavefronts from 128 × 128 to 288 × 288 (82 944 particles), and
-/// 1.03–1.21× from 300 × 300 (90 000) on (crate README, "Each thread on its own rows up to 86 016
-/// particles").
-pub(crate) const TEAM_CLAIMS_FROM_PARTICLES: usize = 86_016;
+/// Particles per thread of a team from which it claims its passes chunk by chunk ([`TeamSlot::lead`],
+/// [`team_claims_its_passes`]); below it each thread keeps its own part of the cloth, and a grid's
+/// position-based step runs as one pass of the pipeline. On two threads the pipeline took 0.76–0.87× the
+/// time (medians of interleaved rounds) of claimed passes or of a chain of wavefronts from 128 × 128 to
+/// 288 × 288 (82 944 particles), and 1.03–1.21× from 300 × 300 (90 000) on (crate README, "Each thread
+/// on its own rows up to 86 016 particles"). Counted per thread: on a 16-core machine, teams of 4–12
+/// threads ran grids of 131 k and 190 k particles as the pipeline in 0.66–0.88× the time of claimed wavefronts
+/// (medians; crate README, "More threads keep their own rows longer").
+pub(crate) const TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD: usize = 43_008;
+
+/// Rows of a grid per thread of its team: a team takes at most `rows / TEAM_ROWS_PER_THREAD` threads (and
+/// at least two), whatever rayon's pool holds. The pipeline needs each thread's rows to outnumber the rows
+/// its stages reach (two up and one down, `pipeline.rs`); a team too large for that steps sub-step by
+/// sub-step, 220 hand-offs a frame of small-steps XPBD ×20 across all its threads. On the 16-core
+/// machine of "More threads keep their own rows longer" (crate README) the default flag (46 rows) took
+/// 0.79–1.16 ms a frame on teams of 4–11 threads and 1.5–53.8 ms on 12 and 16.
+pub(crate) const TEAM_ROWS_PER_THREAD: usize = 4;
+
+/// The threads of the team that steps a grid of `rows` rows when rayon's pool holds `pool_threads`
+/// ([`TEAM_ROWS_PER_THREAD`]).
+pub(crate) fn team_threads_for_rows(pool_threads: usize, rows: usize) -> usize {
+    pool_threads.min((rows / TEAM_ROWS_PER_THREAD).max(2))
+}
+
+/// Whether a team of `threads` claims its passes chunk by chunk on a cloth of `particles`
+/// ([`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`]).
+pub(crate) fn team_claims_its_passes(particles: usize, threads: usize) -> bool {
+    particles >= TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD.saturating_mul(threads)
+}
 
 /// A running cloth simulation. Build it from a [`ClothModel`] and [`SimParams`], then call
 /// [`step`](Simulation::step).
@@ -219,7 +241,7 @@ pub(crate) struct RowForces {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
-    /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES`), the pipeline: a whole step, or
+    /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread), the pipeline: a whole step, or
     /// sub-step by sub-step, as one hand-off. Else a whole step as wavefronts of several sub-steps a pass
     /// from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds; on a
     /// team, as a chain of them where its links hold more sub-steps than passes in parts would, and only
@@ -457,17 +479,18 @@ impl Simulation {
             ..StepInfo::default()
         };
         let wind = self.params.wind;
-        // Position-based methods on a grid run their sub-steps on a team of rayon's thread count
-        // (`TeamSlot`): eleven short passes per sub-step on a grid, too short for rayon's hand-off.
-        let team_threads = if self.parallel()
-            && self.grid_constraints.is_some()
-            && matches!(
-                self.params.method,
-                Method::Pbd { .. } | Method::Xpbd { .. } | Method::SmallStepsXpbd { .. }
-            ) {
-            rayon::current_num_threads()
-        } else {
-            1
+        // Position-based methods on a grid run their sub-steps on a team of rayon's thread count, or
+        // fewer on a grid of few rows (`TeamSlot`, `TEAM_ROWS_PER_THREAD`): eleven short passes per
+        // sub-step on a grid, too short for rayon's hand-off.
+        let team_threads = match self.grid {
+            Some(grid)
+                if self.parallel()
+                    && self.grid_constraints.is_some()
+                    && self.params.method.is_position_based() =>
+            {
+                team_threads_for_rows(rayon::current_num_threads(), grid.rows)
+            }
+            _ => 1,
         };
         // The position-based methods work on the state split by component from here to the end of the
         // step (`components.rs`).
@@ -477,10 +500,10 @@ impl Simulation {
             self.split_velocities.split_from(&self.velocities);
         }
         let mut team = std::mem::take(&mut self.team);
-        // Each thread keeps its own rows, in its core's caches, while the cloth is small enough for that
-        // to pay (measured: `TEAM_CLAIMS_FROM_PARTICLES`); beyond that the team's passes are claimed
-        // chunk by chunk, since one core may run slower than the other.
-        let claim = self.positions.len() >= TEAM_CLAIMS_FROM_PARTICLES;
+        // Each thread keeps its own rows, in its core's caches, while its share of the cloth is small
+        // enough for that to pay (measured: `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`); beyond that the
+        // team's passes are claimed chunk by chunk, since one core may run slower than the other.
+        let claim = team_claims_its_passes(self.positions.len(), team_threads);
         let divergence = team.lead(team_threads, claim, || {
             // A grid's position-based step as one pass of the team, or as wavefronts of several
             // sub-steps, where it can go so; else (and always for the other methods) sub-step by
