@@ -14,10 +14,11 @@
 //! frames of warm-up. Copy this file into another checkout's `crates/sheer-cloth/examples/` to build
 //! the same program against another version of the library.
 //!
-//! `cargo run -p sheer-cloth --release --example fingerprint -- threads 1,2,4,8,16` runs the ways a step
-//! is shared out (teams in equal parts, claimed chains and parts, the triangle path; three methods) on
-//! each of those thread counts and exits non-zero unless every case gave the same bits on all of them:
-//! the determinism check for a machine with more cores than the tests' (1–4 threads).
+//! `cargo run -p sheer-cloth --release --example fingerprint -- threads 1,2,4,8,16` runs nine cases
+//! (teams in equal parts, claimed chains and parts, the triangle path; small-steps XPBD, XPBD with
+//! multipliers and PBD) on each of those thread counts and exits non-zero unless every case gave the
+//! same bits on all of them: the determinism check for a machine with more cores than the build
+//! machine's two, on which the tests run up to 16 threads.
 //!
 //! `cargo run -p sheer-cloth --release --example fingerprint -- together 64x46 400` says how much of two
 //! cores the machine gives right now: it times that setting on one thread alone, then two independent
@@ -83,6 +84,21 @@ fn grid(columns: usize, rows: usize) -> ClothModel {
         ..GridSpec::default()
     };
     ClothModel::grid(&spec).expect("a valid grid")
+}
+
+/// A `columns × rows` grid, or the general triangle mesh of its triangles when `mesh`, with its hoist
+/// (first column) pinned.
+fn hoisted(columns: usize, rows: usize, mesh: bool) -> ClothModel {
+    let grid = grid(columns, rows);
+    let mut model = if mesh {
+        let indices = grid.triangle_indices();
+        ClothModel::from_triangle_mesh(&grid.positions, &indices, 0.2).expect("a valid mesh")
+    } else {
+        grid
+    };
+    let hoist: Vec<usize> = (0..rows).map(|row| row * columns).collect();
+    model.pin(&hoist).expect("pins in range");
+    model
 }
 
 /// Mean milliseconds per frame of small-steps XPBD ×20 on a `columns × rows` flag on `threads` threads
@@ -160,17 +176,7 @@ fn same_bits_on_thread_counts(counts: &[usize]) -> bool {
             .iter()
             .map(|&threads| {
                 fingerprint(threads, frames, || {
-                    let grid = grid(columns, rows);
-                    let mut model = if mesh {
-                        let indices = grid.triangle_indices();
-                        ClothModel::from_triangle_mesh(&grid.positions, &indices, 0.2)
-                            .expect("a valid mesh")
-                    } else {
-                        grid
-                    };
-                    let hoist: Vec<usize> = (0..rows).map(|row| row * columns).collect();
-                    model.pin(&hoist).expect("pins in range");
-                    flag(model, method, Some(1), threads)
+                    flag(hoisted(columns, rows, mesh), method, Some(1), threads)
                 })
             })
             .collect();
@@ -300,7 +306,6 @@ fn main() {
         }
     }
     let (columns, rows) = (40, 29);
-    let hoist: Vec<usize> = (0..rows).map(|row| row * columns).collect();
     for (case, mesh, wind) in [
         ("triangle mesh", true, Some(1)),
         ("grid without wind", false, None),
@@ -308,16 +313,7 @@ fn main() {
         for method in methods {
             for threads in [1, 2] {
                 let hash = fingerprint(threads, 60, || {
-                    let grid = grid(columns, rows);
-                    let mut model = if mesh {
-                        let indices = grid.triangle_indices();
-                        ClothModel::from_triangle_mesh(&grid.positions, &indices, 0.2)
-                            .expect("a valid mesh")
-                    } else {
-                        grid
-                    };
-                    model.pin(&hoist).expect("pins in range");
-                    flag(model, method, wind, threads)
+                    flag(hoisted(columns, rows, mesh), method, wind, threads)
                 });
                 report(format!("{case} {}, {threads} threads", method.name()), hash);
             }

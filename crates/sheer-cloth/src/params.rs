@@ -575,13 +575,14 @@ pub struct SimParams {
     /// 0.119 without; `examples/hanging_stretch.rs`).
     pub long_range_attachments: bool,
     pub divergence: DivergenceLimits,
-    /// Below this many particles every pass runs on one thread. From it, the passes run on rayon's pool,
-    /// or, for the position-based methods on a grid, on a team of as many threads as rayon's pool has,
-    /// which spin between passes and stay with the simulation (parked while it is not stepping). Results
-    /// are bit-identical either way. The team pays from about 400 particles when the machine has a free
-    /// core for each of its threads; the default leaves cloths below 16 384 particles (where rayon's pool
-    /// starts to pay) on one thread, so that a small cloth does not take a second core unasked, e.g.
-    /// from the app's renderer (see the crate README for the measurements).
+    /// Below this many particles every pass runs on one thread. From it, the passes run on rayon's
+    /// pool, or, for the position-based methods on a grid, on a team of as many threads as rayon's
+    /// pool has (but at most a fifth of the grid's rows, and at least two), which spin between
+    /// passes and stay with the simulation (parked while it is not stepping). Results are
+    /// bit-identical either way. The team pays from about 400 particles when the machine has a free
+    /// core for each of its threads; the default leaves cloths below 16 384 particles (where
+    /// rayon's pool starts to pay) on one thread, so that a small cloth does not take a second core
+    /// unasked, e.g. from the app's renderer (see the crate README for the measurements).
     pub parallel_min_particles: usize,
 }
 

@@ -2,18 +2,18 @@
 //! Müller & Chentanez 2016) and small-steps XPBD (Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke &
 //! Müller 2019) — one loop, three settings.
 //!
-//! Per sub-step: external forces into velocities, predict positions, project the distance constraints
-//! batch by batch (Gauss–Seidel across batches, independent within a batch, so a batch can run in
-//! parallel with the same result), then velocities from the position change. The batches are a grid's
-//! row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a grid the batches
-//! along rows share a pass over the rows with the forces and the prediction before them, or with the
-//! attachments and the velocities after them; a large grid runs its whole sub-step (wind, prediction,
-//! every batch) in one pass, as a wavefront down the rows ([`Wavefront`]), and a whole step's sub-steps
-//! several to a pass, or on a team as a chain of such passes on its threads
-//! ([`Wavefront::run_link`]). In parallel, a grid's passes go to the simulation's team
-//! of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in equal parts (a cloth
-//! below 43 008 particles a thread), a grid's whole sub-step, or whole step, is one hand-off, each thread on its
-//! own rows ([`Pipeline`]).
+//! Per sub-step: external forces into velocities, predict positions, project the distance
+//! constraints batch by batch (Gauss–Seidel across batches, independent within a batch, so a batch
+//! can run in parallel with the same result), then velocities from the position change. The batches
+//! are a grid's row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a
+//! grid the batches along rows share a pass over the rows with the forces and the prediction before
+//! them, or with the attachments and the velocities after them; a large grid runs its whole
+//! sub-step (wind, prediction, every batch) in one pass, as a wavefront down the rows
+//! ([`Wavefront`]), and a whole step's sub-steps several to a pass, or on a team as a chain of such
+//! passes on its threads ([`Wavefront::run_link`]). In parallel, a grid's passes go to the
+//! simulation's team of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in
+//! equal parts (a cloth below 43 008 particles a thread), a grid's whole sub-step, or whole step,
+//! is one hand-off, each thread on its own rows ([`Pipeline`]).
 //!
 //! Throughout a step the state is split by component (`Simulation::split_positions`, …;
 //! `components.rs`): every loop here reads and writes x, y and z as three plain arrays.
@@ -506,14 +506,14 @@ unsafe fn end_sweep(
 }
 
 impl Simulation {
-    /// Runs a whole step of `substeps` sub-steps of `h` (s) from time `time` (s) in passes over the rows,
-    /// with the pins prescribed and placed row by row inside them, and returns whether it did: on a team
-    /// in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread) as one pipelined pass of the team; else, from
-    /// `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps a pass (on one thread, or
-    /// on a team that claims its passes). When it did not (a method with multipliers, a mesh, a small
-    /// grid without a team in equal parts, a cloth too short for its parts, attachments reaching too far
-    /// for the prediction to join the wavefront, …) nothing has changed and the caller steps sub-step by
-    /// sub-step.
+    /// Runs a whole step of `substeps` sub-steps of `h` (s) from time `time` (s) in passes over the
+    /// rows, with the pins prescribed and placed row by row inside them, and returns whether it
+    /// did: on a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread) as
+    /// one pipelined pass of the team; else, from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as
+    /// wavefronts of several sub-steps a pass (on one thread, or on a team that claims its passes).
+    /// When it did not (a method with multipliers, a mesh, a small grid without a team in equal
+    /// parts, a cloth too short for its parts, attachments reaching too far for the prediction to
+    /// join the wavefront, …) nothing has changed and the caller steps sub-step by sub-step.
     ///
     /// Sub-step by sub-step, each sub-step is one pass, ended by a barrier at which the leader waits for
     /// the helper, followed by the leader's serial work (the pins, the wind's renewal, the solver's
@@ -933,7 +933,8 @@ impl Simulation {
             opening..batches.len() - closing,
             batches.len() - closing..batches.len(),
         );
-        // The team's threads where one leads (it may hold fewer than rayon's pool: `TEAM_ROWS_PER_THREAD`).
+        // The team's threads where one leads (it may hold fewer than rayon's pool:
+        // `TEAM_ROWS_PER_THREAD`).
         let threads = if parallel {
             team_threads().unwrap_or_else(rayon::current_num_threads)
         } else {
@@ -974,9 +975,9 @@ impl Simulation {
                 } => (parts, Some(substeps_per_pass), false),
                 GridSweep::Chain { .. } if step.is_none() => break 'plan None,
                 GridSweep::Chain { substeps_per_link } => (1, Some(substeps_per_link), true),
-                // Once the cloth outgrows the caches (and, below, in parts only when the seams, which
-                // run on one thread each, are a small share of the rows).
-                // A team in equal parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`).
+                // Once the cloth outgrows the caches (and, below, in parts only when the seams,
+                // which run on one thread each, are a small share of the rows). A team in equal
+                // parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`).
                 GridSweep::Auto
                     if inverse_masses.len() < wavefront_min_particles
                         || (parallel && team_in_equal_parts().is_some()) =>
@@ -2293,14 +2294,15 @@ mod tests {
         assert_eq!(super::link_sizes(20, 6, 2), [5, 5, 5, 5]);
     }
 
-    /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a pass
-    /// (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with the wind held
-    /// for two sub-steps. On one thread in one part. On a team (whose threads claim the passes index by
-    /// index at these sizes, `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`) as a chain where its links hold
-    /// more sub-steps than the passes in parts would: 384 columns on two to four threads (links of four
-    /// or five against passes of at most two; 288 rows on two, 456 on three and four, so that their
-    /// threads claim). Else in parts: 1 400 columns on two threads (one sub-step a pass either way); and
-    /// sub-step by sub-step where no pass fits the parts: 144 rows on three threads.
+    /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a
+    /// pass (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with
+    /// the wind held for two sub-steps. On one thread in one part. On a team (whose threads claim
+    /// the passes index by index at these sizes, `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`) as a
+    /// chain where its links hold more sub-steps than the passes in parts would: 384 columns on two
+    /// to four threads (links of four or five against passes of at most two; 288 rows on two, 456
+    /// on three and four, so that their threads claim). Else in parts: 1 400 columns on two threads
+    /// (one sub-step a pass either way); and sub-step by sub-step where no pass fits the parts: 144
+    /// rows on three threads.
     #[test]
     fn left_to_choose_a_large_grid_takes_several_sub_steps_a_pass_with_the_same_bits() {
         use crate::sim::GridSweep;
@@ -2347,13 +2349,14 @@ mod tests {
         }
     }
 
-    /// Left to choose, a grid from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` on takes several sub-steps a
-    /// pass on one thread; on a team whose threads have fewer than `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`
-    /// particles each, and so keep their own rows, it goes as one pass of the pipeline for the whole step
-    /// (its plan holding all 20 sub-steps) instead of wavefronts; on a team with more, as wavefronts
-    /// claimed chunk by chunk. 256 × 288 (73 728 particles) runs the pipeline on two and three threads;
-    /// 256 × 400 (102 400) wavefronts on two and the pipeline on three, the count being per thread. The
-    /// bits are those of pass by pass every way.
+    /// Left to choose, a grid from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` on takes several sub-steps
+    /// a pass on one thread; on a team whose threads have fewer than
+    /// `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` particles each, and so keep their own rows, it goes
+    /// as one pass of the pipeline for the whole step (its plan holding all 20 sub-steps) instead
+    /// of wavefronts; on a team with more, as wavefronts claimed chunk by chunk. 256 × 288 (73 728
+    /// particles) runs the pipeline on two and three threads; 256 × 400 (102 400) wavefronts on two
+    /// and the pipeline on three, the count being per thread. The bits are those of pass by pass
+    /// every way.
     #[test]
     fn left_to_choose_a_team_in_equal_parts_runs_a_large_grid_as_the_pipeline() {
         use crate::sim::{
@@ -2403,10 +2406,10 @@ mod tests {
         }
     }
 
-    /// A team takes no more threads than a quarter of the grid's rows (`TEAM_ROWS_PER_THREAD`), so that
-    /// the pipeline fits: the default flag's 46 rows on a pool of 16 threads run as the pipeline in 11
-    /// parts, where a team of 16 would step sub-step by sub-step; on 8, in 8. The bits are those of one
-    /// thread either way.
+    /// A team takes no more threads than a fifth of the grid's rows (`TEAM_ROWS_PER_THREAD`), so
+    /// that the pipeline fits: the default flag's 46 rows on a pool of 16 threads run as the
+    /// pipeline in 9 parts, where a team of 16 would step sub-step by sub-step; on 8, in 8. The
+    /// bits are those of one thread either way.
     #[test]
     fn a_team_takes_no_more_threads_than_the_rows_of_its_grid_allow() {
         use crate::sim::team_threads_for_rows;
@@ -2423,15 +2426,73 @@ mod tests {
             (state_bits(&sim), parts)
         };
         let (serial, _) = run(1);
-        for (threads, parts) in [(16, 11), (8, 8)] {
+        for (threads, parts) in [(16, 9), (8, 8)] {
             assert_eq!(team_threads_for_rows(threads, rows), parts);
             let (bits, how) = run(threads);
             assert!(bits == serial, "{threads} threads: not the bits of one");
             assert_eq!(how, Some(parts), "{threads} threads");
         }
         // At least two, however few the rows; never more than the pool.
-        assert_eq!(team_threads_for_rows(16, 5), 2);
+        assert_eq!(team_threads_for_rows(16, 7), 2);
         assert_eq!(team_threads_for_rows(3, 1000), 3);
+    }
+
+    /// The team that `team_threads_for_rows` allows a grid fits the pipeline, whatever the pool:
+    /// every grid of 10–200 rows and 2, 5 and 64 columns, 1, 3, 10 and 20 sweeps, a whole step with
+    /// the wind renewed in every sub-step, in none and in every other, and one sub-step with and
+    /// without, on a pool of 1 024 threads. The cuts follow the rows' work, which is less in the
+    /// first and last rows, so a part can get fewer rows than the mean: with four rows a thread, 5
+    /// × 12 in three parts does not fit.
+    #[test]
+    fn the_team_the_rows_allow_fits_the_pipeline() {
+        use super::PipelineStages;
+        use crate::pipeline::Progress;
+        use crate::sim::team_threads_for_rows;
+        use std::ops::Range;
+        let within_rows = |batch: &(Vec<Range<usize>>, usize)| batch.1 == 0;
+        for columns in [2, 5, 64] {
+            for rows in 10..=200 {
+                let sim = windy_flag(columns, rows, 1.0, Method::default(), false);
+                let grid = sim.grid_constraints.as_ref().unwrap();
+                let batches = grid.by_last_row.len();
+                let opening = grid
+                    .by_last_row
+                    .iter()
+                    .take_while(|b| within_rows(b))
+                    .count();
+                let closing = grid.by_last_row[opening..]
+                    .iter()
+                    .rev()
+                    .take_while(|b| within_rows(b))
+                    .count();
+                let parts = team_threads_for_rows(1024, rows);
+                for iterations in [1, 3, 10, 20] {
+                    let every_other: Vec<bool> = (0..20).map(|s| s % 2 == 0).collect();
+                    for renewed in [
+                        vec![true; 20],
+                        vec![false; 20],
+                        every_other,
+                        vec![true],
+                        vec![false],
+                    ] {
+                        let stages = PipelineStages::new(
+                            &renewed,
+                            &grid.strips,
+                            &grid.by_last_row,
+                            opening..batches - closing,
+                            iterations,
+                            columns,
+                            parts,
+                            &Progress::default(),
+                        );
+                        assert!(
+                            stages.is_some(),
+                            "{columns} × {rows}, {iterations} sweeps, {parts} parts"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     /// In a pass of several sub-steps the attachments of a sub-step (at the end of each of its sweeps)

@@ -102,23 +102,29 @@ pub(crate) struct CgScratch {
     pub spring_terms: Vec<DVec3>,
 }
 
-/// Particles per thread of a team from which it claims its passes chunk by chunk ([`TeamSlot::lead`],
-/// [`team_claims_its_passes`]); below it each thread keeps its own part of the cloth, and a grid's
-/// position-based step runs as one pass of the pipeline. On two threads the pipeline took 0.76–0.87× the
-/// time (medians of interleaved rounds) of claimed passes or of a chain of wavefronts from 128 × 128 to
-/// 288 × 288 (82 944 particles), and 1.03–1.21× from 300 × 300 (90 000) on (crate README, "Each thread
-/// on its own rows up to 86 016 particles"). Counted per thread: on a 16-core machine, teams of 4–12
-/// threads ran grids of 131 k and 190 k particles as the pipeline in 0.66–0.88× the time of claimed wavefronts
-/// (medians; crate README, "More threads keep their own rows longer").
+/// Particles per thread of a team from which it claims its passes chunk by chunk
+/// ([`TeamSlot::lead`], [`team_claims_its_passes`]); below it each thread keeps its own part of the
+/// cloth, and a grid's position-based step runs as one pass of the pipeline. On two threads the
+/// pipeline took 0.76–0.87× the time (medians of interleaved rounds) of claimed passes or of a
+/// chain of wavefronts from 128 × 128 to 288 × 288 (82 944 particles), and 1.03–1.21× from 300 ×
+/// 300 (90 000) on (crate README, "Each thread on its own rows up to 86 016 particles"). Counted
+/// per thread: on a 16-core machine, teams of 4–12 threads ran grids of 131 k and 190 k particles
+/// as the pipeline in 0.66–0.88× the time of claimed passes (medians; a chain of wavefronts on four
+/// threads at 362 × 362, sub-step by sub-step on 8 and 12, whose parts had too few rows for
+/// wavefronts; crate README, "More threads keep their own rows longer").
 pub(crate) const TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD: usize = 43_008;
 
-/// Rows of a grid per thread of its team: a team takes at most `rows / TEAM_ROWS_PER_THREAD` threads (and
-/// at least two), whatever rayon's pool holds. The pipeline needs each thread's rows to outnumber the rows
-/// its stages reach (two up and one down, `pipeline.rs`); a team too large for that steps sub-step by
-/// sub-step, 220 hand-offs a frame of small-steps XPBD ×20 across all its threads. On the 16-core
-/// machine of "More threads keep their own rows longer" (crate README) the default flag (46 rows) took
-/// 0.79–1.16 ms a frame on teams of 4–11 threads and 1.5–53.8 ms on 12 and 16.
-pub(crate) const TEAM_ROWS_PER_THREAD: usize = 4;
+/// Rows of a grid per thread of its team: a team takes at most `rows / TEAM_ROWS_PER_THREAD`
+/// threads, whatever rayon's pool holds. The pipeline needs each thread's rows to outnumber the
+/// rows its stages reach (two up and one down, `pipeline.rs`), and its cuts follow the rows' work,
+/// so a part may get a row less than the mean (with four rows a thread, 5 × 12 in three parts does
+/// not fit; five fit every grid of 10–200 rows, `the_team_the_rows_allow_fits_the_pipeline`). A
+/// team too large for it steps sub-step by sub-step, 220 hand-offs a frame of small-steps XPBD ×20
+/// across all its threads: on the 16-core machine of "More threads keep their own rows longer"
+/// (crate README) the default flag (46 rows) took 0.79–1.18 ms a frame on teams of 4–11 threads and
+/// 1.5–53.8 ms on 12 and 16. At least two, so that a grid of few rows still runs on a team rather
+/// than on rayon's pool, whose hand-off is slower than a pass.
+pub(crate) const TEAM_ROWS_PER_THREAD: usize = 5;
 
 /// The threads of the team that steps a grid of `rows` rows when rayon's pool holds `pool_threads`
 /// ([`TEAM_ROWS_PER_THREAD`]).
@@ -241,13 +247,13 @@ pub(crate) struct RowForces {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
 pub(crate) enum GridSweep {
-    /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread), the pipeline: a whole step, or
-    /// sub-step by sub-step, as one hand-off. Else a whole step as wavefronts of several sub-steps a pass
-    /// from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (as many a pass as `WAVEFRONT_WINDOW_BYTES` holds; on a
-    /// team, as a chain of them where its links hold more sub-steps than passes in parts would, and only
-    /// where passes in parts fit), a sub-step as one wavefront from `WAVEFRONT_MIN_PARTICLES` (on several
-    /// threads only with enough rows per thread for the seams: `…_ROWS_PER_DEPTH` times the depth); else
-    /// pass by pass.
+    /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread), the
+    /// pipeline: a whole step, or sub-step by sub-step, as one hand-off. Else a whole step as
+    /// wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (as many a
+    /// pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, as a chain of them where its links hold
+    /// more sub-steps than passes in parts would, and only where passes in parts fit), a sub-step
+    /// as one wavefront from `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows
+    /// per thread for the seams: `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
     #[default]
     Auto,
     /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).

@@ -106,8 +106,9 @@ fn identical_bits_on_one_two_and_four_threads() {
 fn identical_bits_on_grids_in_equal_parts_and_in_claimed_chunks() {
     // 60 × 300 particles: a team keeps its threads on their own rows (the pipeline of a whole step);
     // 60 × 2 200 (132 000): past 43 008 particles a thread on two and three threads, a team claims its
-    // passes chunk by chunk instead, and a whole step goes as a chain of wavefronts. XPBD with three iterations keeps multipliers, so
-    // it goes sub-step by sub-step: the pipeline of a sub-step, and passes claimed chunk by chunk.
+    // passes chunk by chunk instead, and a whole step goes as wavefronts of several sub-steps. XPBD
+    // with three iterations keeps multipliers, so it goes sub-step by sub-step: the pipeline of a
+    // sub-step, and passes claimed chunk by chunk.
     let methods = [
         Method::default(),
         Method::Xpbd {
