@@ -143,11 +143,12 @@ fn parse_case(grid: &str, count: &str, frames: &str) -> Option<((usize, usize), 
 /// Runs each case of `threads` on every count in `counts` (the parallel paths forced on from two) and
 /// prints its hashes; whether every case gave the same bits on all of them.
 ///
-/// The cases reach each way a step is shared out, on two threads: a team in equal parts (the default
-/// flag, and 288 × 288, below 43 008 particles a thread), chunks claimed from a chain of wavefronts
-/// (362 × 362) and from wavefronts in parts (1 024 × 745), and the general triangle path; for
-/// small-steps XPBD, XPBD with multipliers and PBD. More threads keep their own rows on larger grids
-/// (362 × 362 from four, 1 024 × 745 from eighteen).
+/// On two threads the cases take these ways of sharing out a step: a team in equal parts (the
+/// default flag, and 288 × 288, below 43 008 particles a thread), chunks claimed from a chain of
+/// wavefronts (362 × 362) and from wavefronts in parts (1 024 × 745), and the general triangle path;
+/// for small-steps XPBD, XPBD with multipliers and PBD. Not the sub-step-by-sub-step wavefront of
+/// 262 144 particles and more. More threads keep their own rows on larger grids (362 × 362 from
+/// four, 1 024 × 745 from eighteen).
 fn same_bits_on_thread_counts(counts: &[usize]) -> bool {
     let small_steps = Method::SmallStepsXpbd { substeps: 20 };
     let xpbd = Method::Xpbd {
