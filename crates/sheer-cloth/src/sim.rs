@@ -106,8 +106,8 @@ pub(crate) struct CgScratch {
 /// ([`TeamSlot::lead`], [`team_claims_its_passes`]); below it each thread keeps its own part of the
 /// cloth, and a grid's position-based step runs as one pass of the pipeline. On two threads the
 /// pipeline took 0.76–0.87× the time (medians of interleaved rounds) of claimed passes or of a
-/// chain of wavefronts from 128 × 128 to 288 × 288 (82 944 particles), and 1.03–1.21× from 300 ×
-/// 300 (90 000) on (crate README, "Each thread on its own rows up to 86 016 particles"). Counted
+/// chain of wavefronts from 128 × 128 to 288 × 288 (82 944 particles), and 1.03–1.21× from
+/// 300 × 300 (90 000) on (crate README, "Each thread on its own rows up to 86 016 particles"). Counted
 /// per thread: on a 16-core machine, teams of 4–12 threads ran grids of 131 k and 190 k particles
 /// as the pipeline in 0.66–0.88× the time of claimed passes (medians; a chain of wavefronts on four
 /// threads at 362 × 362, sub-step by sub-step on 8 and 12, whose parts had too few rows for
