@@ -240,6 +240,20 @@ impl GridConstraints {
         Some(grid)
     }
 
+    /// The batches between those along rows (span 0) that open a sweep (`0..start`) and those that
+    /// close it (`end..`): the solver runs the opening and closing ones row by row with the per-row
+    /// work before and after them.
+    pub fn middle_batches(&self) -> Range<usize> {
+        let within_rows = |batch: &&(Vec<Range<usize>>, usize)| batch.1 == 0;
+        let opening = self.by_last_row.iter().take_while(within_rows).count();
+        let closing = self.by_last_row[opening..]
+            .iter()
+            .rev()
+            .take_while(within_rows)
+            .count();
+        opening..self.by_last_row.len() - closing
+    }
+
     /// Whether any constraint may be strained beyond `max_strain` at `positions`
     /// ([`may_exceed_strain`]: conservative, for the divergence check to screen with), strip by strip.
     pub fn any_near_strain(&self, positions: &[DVec3], max_strain: f64, parallel: bool) -> bool {

@@ -903,6 +903,13 @@ impl Simulation {
         let (columns, rows) = (shape.columns, shape.rows);
         let inverse_masses = &inverse_masses[..];
         let (gravity, air_damping) = (params.gravity, params.air_damping);
+        let sweep_order = *grid_sweep;
+        // The batches within rows that open a sweep, those that close it, and the rest.
+        let middle = if sweep_order == GridSweep::BatchByBatch {
+            0..grid.batches.len()
+        } else {
+            grid.middle_batches()
+        };
         let GridConstraints {
             springs: _,
             strips,
@@ -912,27 +919,10 @@ impl Simulation {
             lambdas,
             by_last_row,
         } = grid;
-        let sweep_order = *grid_sweep;
         if MULTIPLIERS {
             lambdas.fill(0.0);
         }
-        // The batches within rows that open a sweep, those that close it, and the rest.
-        let within_rows = |batch: &&(Vec<Range<usize>>, usize)| batch.1 == 0;
-        let (opening, closing) = if sweep_order == GridSweep::BatchByBatch {
-            (0, 0)
-        } else {
-            let opening = by_last_row.iter().take_while(within_rows).count();
-            let closing = by_last_row[opening..]
-                .iter()
-                .rev()
-                .take_while(within_rows)
-                .count();
-            (opening, closing)
-        };
-        let (middle, closing) = (
-            opening..batches.len() - closing,
-            batches.len() - closing..batches.len(),
-        );
+        let (opening, closing) = (middle.start, middle.end..batches.len());
         // The team's threads where one leads (it may hold fewer than rayon's pool:
         // `TEAM_ROWS_PER_THREAD`).
         let threads = if parallel {
@@ -2448,23 +2438,10 @@ mod tests {
         use super::PipelineStages;
         use crate::pipeline::Progress;
         use crate::sim::team_threads_for_rows;
-        use std::ops::Range;
-        let within_rows = |batch: &(Vec<Range<usize>>, usize)| batch.1 == 0;
         for columns in [2, 5, 64] {
             for rows in 10..=200 {
                 let sim = windy_flag(columns, rows, 1.0, Method::default(), false);
                 let grid = sim.grid_constraints.as_ref().unwrap();
-                let batches = grid.by_last_row.len();
-                let opening = grid
-                    .by_last_row
-                    .iter()
-                    .take_while(|b| within_rows(b))
-                    .count();
-                let closing = grid.by_last_row[opening..]
-                    .iter()
-                    .rev()
-                    .take_while(|b| within_rows(b))
-                    .count();
                 let parts = team_threads_for_rows(1024, rows);
                 for iterations in [1, 3, 10, 20] {
                     let every_other: Vec<bool> = (0..20).map(|s| s % 2 == 0).collect();
@@ -2479,7 +2456,7 @@ mod tests {
                             &renewed,
                             &grid.strips,
                             &grid.by_last_row,
-                            opening..batches - closing,
+                            grid.middle_batches(),
                             iterations,
                             columns,
                             parts,
