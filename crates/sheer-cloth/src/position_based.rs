@@ -553,7 +553,7 @@ impl Simulation {
             GridSweep::Wavefront {
                 substeps_per_pass, ..
             } => substeps_per_pass > 0,
-            GridSweep::Chain { .. } => true,
+            GridSweep::Chain { .. } | GridSweep::Opposed { .. } => true,
             GridSweep::Auto => !small && !pipeline,
             _ => false,
         };
@@ -563,6 +563,7 @@ impl Simulation {
             && !(self.wind_acts() && self.grid_triangulation.is_none());
         self.wavefront_substeps_per_pass = 0;
         self.wavefront_chained = false;
+        self.wavefront_opposed = false;
         if !eligible {
             return false;
         }
@@ -894,6 +895,7 @@ impl Simulation {
             pipeline_plan,
             wavefront_substeps_per_pass,
             wavefront_chained,
+            wavefront_opposed,
             ..
         } = self
         else {
@@ -963,8 +965,11 @@ impl Simulation {
                     parts,
                     substeps_per_pass,
                 } => (parts, Some(substeps_per_pass), false),
-                GridSweep::Chain { .. } if step.is_none() => break 'plan None,
+                GridSweep::Chain { .. } | GridSweep::Opposed { .. } if step.is_none() => {
+                    break 'plan None;
+                }
                 GridSweep::Chain { substeps_per_link } => (1, Some(substeps_per_link), true),
+                GridSweep::Opposed { substeps_per_pass } => (2, Some(substeps_per_pass), false),
                 // Once the cloth outgrows the caches (and, below, in parts only when the seams,
                 // which run on one thread each, are a small share of the rows). A team in equal
                 // parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`).
@@ -1035,7 +1040,26 @@ impl Simulation {
                     parts: 1,
                     most_per_pass: most,
                     chain_team: Some(team),
+                    opposed: false,
                 });
+            }
+            // Two parts sweeping opposite ways: each part's strips need the other's only across the
+            // cut, where the attachments would read the pins of rows across it too if they reached
+            // beyond their own row.
+            let opposed = |most: usize| WavefrontPlan {
+                passes: passes_of(&even(most)),
+                parts: 2,
+                most_per_pass: most,
+                chain_team: None,
+                opposed: true,
+            };
+            if let GridSweep::Opposed { .. } = sweep_order {
+                assert_eq!(
+                    chain_team,
+                    Some(2),
+                    "opposed parts need a team of two threads"
+                );
+                break 'plan (reach == 0).then(|| opposed(most));
             }
             // In parts: as many sub-steps a pass as fit the parts, at most `most`.
             let in_parts = (1..=most).rev().find_map(|per_pass| {
@@ -1051,12 +1075,24 @@ impl Simulation {
                     parts,
                     most_per_pass: per_pass,
                     chain_team: None,
+                    opposed: false,
                 })
             });
-            // On a team, a chain where each of its links holds more sub-steps than a pass in parts
-            // would: both stream a row from memory once a pass (or link), but a chain has no seams to
-            // make room for (crate README, "A chain of wavefronts"). Where no pass fits the parts the
-            // step goes sub-step by sub-step as before: a chain there is not measured.
+            // On a team of two whose attachments read their own rows' pins, two parts sweeping
+            // opposite ways where their passes hold more sub-steps than passes in parts would: each
+            // thread keeps its own rows, as in parts, without seams to make room for (crate README,
+            // "Two parts sweeping opposite ways").
+            if let (GridSweep::Auto, Some(2), 0) = (sweep_order, chain_team, reach)
+                && in_parts
+                    .as_ref()
+                    .is_some_and(|plan| most > plan.most_per_pass)
+            {
+                break 'plan Some(opposed(most));
+            }
+            // On a larger team, a chain where each of its links holds more sub-steps than a pass in
+            // parts would: both stream a row from memory once a pass (or link), but a chain has no
+            // seams to make room for (crate README, "A chain of wavefronts"). Where no pass fits the
+            // parts the step goes sub-step by sub-step as before: neither is measured there.
             if let (GridSweep::Auto, Some(team)) = (sweep_order, chain_team) {
                 let sizes = link_sizes(substep_count, most, team);
                 let shortest = sizes.iter().copied().min().unwrap_or(1);
@@ -1070,6 +1106,7 @@ impl Simulation {
                         parts: 1,
                         most_per_pass: longest,
                         chain_team: Some(team),
+                        opposed: false,
                     });
                 }
             }
@@ -1175,8 +1212,11 @@ impl Simulation {
         // SAFETY (callers): the strips of a batch touch disjoint particle ranges (checked by the
         // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
         // touch no row at once that another part touches (`Pipeline`), the wavefront's concurrent
-        // parts and seams touch disjoint rows (`Wavefront::fits`), and a chain's links touch a row
-        // only after the earlier links are done with it (`Wavefront::run_link`); each strip owns its
+        // parts and seams touch disjoint rows (`Wavefront::fits`), a chain's links touch a row
+        // only after the earlier links are done with it (`Wavefront::run_link`), and two opposed
+        // parts touch a row at once only with units of the same item, which write nothing in common
+        // (a batch's strips share no particle, as in a pass over them; two cell rows of the wind only
+        // read the particle row between them) (`Wavefront::run_opposed_part`); each strip owns its
         // constraints' multipliers.
         let project_these = |strips: &[Strip]| {
             // A batch holds one family.
@@ -1387,11 +1427,13 @@ impl Simulation {
             parts: parts_count,
             most_per_pass: per_pass,
             chain_team: chain,
+            opposed,
         }) = wavefront
         {
             if step.is_some() {
                 *wavefront_substeps_per_pass = per_pass;
                 *wavefront_chained = chain.is_some();
+                *wavefront_opposed = opposed;
             }
             let run_item =
                 |items: &[(WaveItem, usize)], item: usize, row: usize| match items[item].0 {
@@ -1427,6 +1469,22 @@ impl Simulation {
                         }
                     })
                 });
+                return true;
+            }
+            if opposed {
+                for (pass, (plan, items)) in passes.iter().enumerate() {
+                    let run_item = |item: usize, row: usize| run_item(items, item, row);
+                    // Each pass starts on the rows the pass before ended on: the two parts reach the
+                    // middle row at the end of one pass and leave it at the start of the next.
+                    let halves = plan.opposed_parts(rows / 2, pass % 2 == 1);
+                    progress.reset_links(2);
+                    let progress = &*progress;
+                    // Two indices, one per thread of the team: claimed, the thread that took the
+                    // first cannot finish it before the other thread has taken the second.
+                    parts(2, parallel, 1, |part| {
+                        part.for_each(|p| plan.run_opposed_part(&halves, p, progress, run_item))
+                    });
+                }
                 return true;
             }
             for (plan, items) in &passes {
@@ -1475,6 +1533,8 @@ struct WavefrontPlan {
     most_per_pass: usize,
     /// In a chain, the team's threads that its links go to in turn.
     chain_team: Option<usize>,
+    /// Whether each pass goes as two parts sweeping opposite ways (`Wavefront::opposed_parts`).
+    opposed: bool,
 }
 
 /// What an item of a grid sub-step's wavefront ([`Wavefront`]) does on its last row.
@@ -2254,6 +2314,61 @@ mod tests {
         }
     }
 
+    /// A whole step as two opposed parts on a team of two threads (passes of 1, 2, 3 and all
+    /// sub-steps, so that the parts meet and leave the middle row by turns) gives the bits of pass by
+    /// pass: small-steps XPBD and PBD, with the wind renewed every sub-step, held for three and off,
+    /// a turning and swaying pole; XPBD with multipliers steps sub-step by sub-step, and so does a
+    /// grid whose attachments read the pins of other rows (pinned every third row: a reach of one).
+    #[test]
+    fn a_whole_step_as_two_opposed_parts_gives_the_bits_of_pass_by_pass() {
+        use crate::sim::GridSweep;
+        for method in WHOLE_STEP_METHODS {
+            let whole_steps = !matches!(method, Method::Xpbd { .. });
+            for (speed, interval) in WHOLE_STEP_WINDS {
+                for every_third_row in [false, true] {
+                    let run = |sweep: GridSweep, threads: usize| {
+                        let mut sim = windy_flag(9, 61, 1.5, method, threads > 1);
+                        if every_third_row {
+                            let spec = GridSpec {
+                                columns: 9,
+                                rows: 61,
+                                height: 1.5,
+                                ..GridSpec::default()
+                            };
+                            let mut model = ClothModel::grid(&spec).unwrap();
+                            let pins: Vec<usize> = (0..61).step_by(3).map(|row| row * 9).collect();
+                            model.pin(&pins).unwrap();
+                            sim = Simulation::new(model, sim.params.clone()).unwrap();
+                            assert_eq!(sim.tether_row_reach, 1);
+                        }
+                        sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
+                        sim.params.wind.renewal_interval = held_for(interval, method);
+                        sim.grid_sweep = sweep;
+                        turning_pole(&mut sim, threads, 6);
+                        let run = (sim.wavefront_substeps_per_pass, sim.wavefront_opposed);
+                        (state_bits(&sim), run)
+                    };
+                    let (passes, _) = run(GridSweep::Passes, 1);
+                    for substeps_per_pass in [1, 2, 3, 20] {
+                        let sweep = GridSweep::Opposed { substeps_per_pass };
+                        let (bits, (per_pass, opposed)) = run(sweep, 2);
+                        let what = format!(
+                            "{method:?}, wind {speed} m/s every {interval}, pinned every third row \
+                             {every_third_row}: up to {substeps_per_pass} sub-steps a pass"
+                        );
+                        assert_eq!(passes, bits, "{what}");
+                        if whole_steps && !every_third_row {
+                            let most = substeps_per_pass.min(method.substeps() as usize);
+                            assert_eq!((per_pass, opposed), (most, true), "{what}");
+                        } else {
+                            assert_eq!((per_pass, opposed), (0, false), "{what}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// A chain's links spread a step's sub-steps evenly over the threads, in as few rounds as links of
     /// at most `most` allow.
     #[test]
@@ -2287,17 +2402,18 @@ mod tests {
     /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a
     /// pass (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with
     /// the wind held for two sub-steps. On one thread in one part. On a team (whose threads claim
-    /// the passes index by index at these sizes, `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`) as a
-    /// chain where its links hold more sub-steps than the passes in parts would: 384 columns on two
-    /// to four threads (links of four or five against passes of at most two; 288 rows on two, 456
-    /// on three and four, so that their threads claim). Else in parts: 1 400 columns on two threads
-    /// (one sub-step a pass either way); and sub-step by sub-step where no pass fits the parts: 144
-    /// rows on three threads.
+    /// the passes index by index at these sizes, `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`) where
+    /// passes in parts would hold fewer: on two threads as two opposed parts, as many sub-steps a
+    /// pass as on one (384 × 288, against at most two in parts); on three and four as a chain
+    /// (384 × 456, so that their threads claim: links of four or five). Else in parts: 1 400
+    /// columns on two threads (one sub-step a pass every way); and sub-step by sub-step where no
+    /// pass fits the parts: 144 rows on three threads.
     #[test]
     fn left_to_choose_a_large_grid_takes_several_sub_steps_a_pass_with_the_same_bits() {
         use crate::sim::GridSweep;
         let method = Method::SmallStepsXpbd { substeps: 20 };
-        // (columns, rows, threads, whether a team chains it: None where the step goes sub-step by sub-step).
+        // (columns, rows, threads, whether a team of two runs opposed parts and a larger one chains it:
+        // None where the step goes sub-step by sub-step).
         let cases = [
             (384, 288, [1, 2].as_slice(), Some(true)),
             (384, 456, [3, 4].as_slice(), Some(true)),
@@ -2314,7 +2430,11 @@ mod tests {
                 sim.params.wind.renewal_interval = held_for(2, method);
                 sim.grid_sweep = sweep;
                 turning_pole(&mut sim, threads, 2);
-                let run = (sim.wavefront_substeps_per_pass, sim.wavefront_chained);
+                let run = (
+                    sim.wavefront_substeps_per_pass,
+                    sim.wavefront_chained,
+                    sim.wavefront_opposed,
+                );
                 (state_bits(&sim), run)
             };
             let (passes, _) = run(GridSweep::Passes, 1);
@@ -2323,17 +2443,22 @@ mod tests {
             let most = super::substeps_in_flight(columns, 12, 20);
             for &threads in thread_counts {
                 let what = format!("{columns} × {rows} on {threads} threads");
-                let (bits, (per_pass, in_chain)) = run(GridSweep::Auto, threads);
+                let (bits, (per_pass, in_chain, opposed)) = run(GridSweep::Auto, threads);
                 assert!(bits == passes, "{what}: not the bits of pass by pass");
+                let how = (per_pass, in_chain, opposed);
                 match (threads, chained) {
-                    (1, _) => assert_eq!((per_pass, in_chain), (most, false), "{what}"),
+                    (1, _) => assert_eq!(how, (most, false, false), "{what}"),
+                    (2, Some(true)) => {
+                        assert_eq!(how, (most, false, true), "{what}");
+                        assert!(per_pass > 2, "{what}: {per_pass} sub-steps a pass");
+                    }
                     (_, Some(true)) => {
                         let longest = super::link_sizes(20, most, threads).into_iter().max();
-                        assert_eq!((Some(per_pass), in_chain), (longest, true), "{what}");
+                        assert_eq!((Some(per_pass), in_chain, opposed), (longest, true, false));
                         assert!(per_pass >= 4, "{what}: links of {per_pass}");
                     }
-                    (_, Some(false)) => assert_eq!((per_pass, in_chain), (1, false), "{what}"),
-                    (_, None) => assert_eq!((per_pass, in_chain), (0, false), "{what}"),
+                    (_, Some(false)) => assert_eq!(how, (1, false, false), "{what}"),
+                    (_, None) => assert_eq!(how, (0, false, false), "{what}"),
                 }
             }
         }

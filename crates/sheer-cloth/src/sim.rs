@@ -230,6 +230,8 @@ pub struct Simulation {
     pub(crate) wavefront_substeps_per_pass: usize,
     /// Whether those wavefronts ran as a chain on the team's threads (`Wavefront::run_link`).
     pub(crate) wavefront_chained: bool,
+    /// Whether they ran as two parts sweeping opposite ways (`Wavefront::opposed_parts`).
+    pub(crate) wavefront_opposed: bool,
 }
 
 /// What the rows of a grid's first pass add to each particle's body force
@@ -250,8 +252,10 @@ pub(crate) enum GridSweep {
     /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread), the
     /// pipeline: a whole step, or sub-step by sub-step, as one hand-off. Else a whole step as
     /// wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (as many a
-    /// pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, as a chain of them where its links hold
-    /// more sub-steps than passes in parts would, and only where passes in parts fit), a sub-step
+    /// pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, where passes in parts fit but hold fewer
+    /// sub-steps than that, as two parts sweeping opposite ways on a team of two threads whose
+    /// attachments read their own rows' pins, else as a chain of them where its links hold more
+    /// sub-steps than passes in parts would), a sub-step
     /// as one wavefront from `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows
     /// per thread for the seams: `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
     #[default]
@@ -275,6 +279,12 @@ pub(crate) enum GridSweep {
     /// sub-steps (the last may have fewer), link `k` on thread `k mod threads`; sub-step by sub-step
     /// pass by pass where a whole step cannot go in wavefronts.
     Chain { substeps_per_link: usize },
+    /// On a team of two threads (it must have one), a whole step's passes of up to
+    /// `substeps_per_pass` sub-steps each as two parts sweeping opposite ways
+    /// ([`Wavefront::opposed_parts`](crate::wavefront::Wavefront::opposed_parts)); sub-step by
+    /// sub-step pass by pass where a whole step cannot go in wavefronts, or where the attachments
+    /// read pins of other rows.
+    Opposed { substeps_per_pass: usize },
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -418,6 +428,7 @@ impl Simulation {
             skip_switched_off_families: true,
             wavefront_substeps_per_pass: 0,
             wavefront_chained: false,
+            wavefront_opposed: false,
             grid_triangulation,
             grid: model.grid,
             masses: model.masses,

@@ -43,6 +43,20 @@
 //! cache allows however few rows each thread would get; but the thread after reads each row from the
 //! other core a link's depth of rows later, which on the build machine cost as much as reading it
 //! from memory (crate README, "A chain of wavefronts").
+//!
+//! Two *opposed parts* keep each of two threads on its own rows without seams. Each strip goes to the
+//! part that holds its first row; one part sweeps its rows downwards as above, the other upwards
+//! (item `i` on first row `f` at step `b − 1 − f + lagᵢ`, `b` the row after the part's last: the same
+//! order, mirrored; [`Wavefront::opposed_sweep`]), so within a part every pair of strips that share a
+//! row runs in item order as in one part. Across the cut only the rows `cut .. cut + most span` are
+//! touched by both, and there a strip waits until the other part has run every strip of an earlier
+//! item that shares a row with it (each part's counter in [`Progress`]; which strip waits for what
+//! is worked out before the pass, [`Wavefront::opposed_parts`]). No strip waits for a strip of a
+//! later item; that the two parts never wait for each other for ever is checked rather than proved,
+//! on a simulation of the two parts for every cut of short grids and several of tall ones, each
+//! part running ahead, by turns and at random, and on threads. When the parts sweep towards the cut,
+//! they meet there at the end of a pass; the solver turns them round every pass, so that each pass
+//! starts on the rows the one before ended on (crate README, "Two opposed parts").
 
 use std::ops::Range;
 
@@ -196,6 +210,157 @@ impl Wavefront {
                 }
             }
         }
+    }
+}
+
+/// The plan of two parts of a wavefront that run at once, each over its own rows, in opposite
+/// directions, waiting for each other only where their strips share a row across the cut between
+/// them (see the module documentation). Each strip goes to the part that holds its first row.
+#[derive(Clone, Debug)]
+pub(crate) struct OpposedParts {
+    /// The first row of part 1.
+    cut: usize,
+    /// Whether part 0 sweeps its rows upwards and part 1 downwards (the two leave the cut at the
+    /// start); else the other way round (they reach it at the end).
+    upward_first: bool,
+    /// Per part, in its order, its units that share a row with the other part's: the unit and how
+    /// far the other part must have got before it (0: no wait).
+    waits: [Vec<(usize, usize)>; 2],
+}
+
+/// An item's units in one of two opposed parts that touch rows the other part touches too: each unit
+/// and those rows.
+type ZoneUnits = Vec<(usize, Range<usize>)>;
+
+impl OpposedParts {
+    /// Whether part `part` sweeps upwards.
+    fn upward(&self, part: usize) -> bool {
+        self.upward_first == (part == 0)
+    }
+
+    /// The first rows of the strips part `part` holds.
+    fn first_rows(&self, part: usize, rows: usize) -> Range<usize> {
+        if part == 0 {
+            0..self.cut
+        } else {
+            self.cut..rows
+        }
+    }
+}
+
+impl Wavefront {
+    /// Calls `visit(unit, item, last_row)` for part `part`'s strips of `plan` in its order, `unit`
+    /// counting up (step by step, items in order within a step). Downwards, item `i` runs on last row
+    /// `r` at step `r − a + lagᵢ` (`a` the part's first row): the order of the module documentation.
+    /// Upwards, on first row `f` at step `b − 1 − f + lagᵢ` (`b` the row after the part's last): two
+    /// strips of items `i < j` that share a row have `fⱼ ≤ fᵢ + spanᵢ`, so `b − 1 − fᵢ + lagᵢ ≤
+    /// b − 1 − fⱼ + lagᵢ + spanᵢ ≤ b − 1 − fⱼ + lagⱼ`: the same order, mirrored.
+    fn opposed_sweep(
+        &self,
+        plan: &OpposedParts,
+        part: usize,
+        mut visit: impl FnMut(usize, usize, usize),
+    ) {
+        let firsts = plan.first_rows(part, self.rows);
+        if firsts.is_empty() {
+            return;
+        }
+        let items = self.lags.len();
+        let upward = plan.upward(part);
+        for t in 0..firsts.len() + self.depth() {
+            for (i, (&lag, &span)) in self.lags.iter().zip(&self.spans).enumerate() {
+                let Some(step) = t.checked_sub(lag) else {
+                    continue;
+                };
+                let first = if upward {
+                    (firsts.end - 1).checked_sub(step)
+                } else {
+                    (firsts.start + step).checked_sub(span)
+                };
+                if let Some(first) = first.filter(|f| firsts.contains(f) && f + span < self.rows) {
+                    visit(t * items + i + 1, i, first + span);
+                }
+            }
+        }
+    }
+
+    /// The plan of two parts cut at row `cut`, part 0 sweeping upwards when `upward_first` (part 1
+    /// then downwards: the two leave the cut at the start), else downwards (the two reach the cut at
+    /// the end). For every pair of strips of different items that share a row across the cut, the
+    /// strip of the later item waits until the other part has run the earlier one. A cut at row 0
+    /// or at `rows` leaves one part every row and the other none.
+    pub fn opposed_parts(&self, cut: usize, upward_first: bool) -> OpposedParts {
+        let mut plan = OpposedParts {
+            cut: cut.min(self.rows),
+            upward_first,
+            waits: [Vec::new(), Vec::new()],
+        };
+        let most_span = self.spans.iter().copied().max().unwrap_or(0);
+        // Part 0's strips touch rows below `cut + most_span`, part 1's rows from `cut` on.
+        let zone = plan.cut..(plan.cut + most_span).min(self.rows);
+        // Per item and part: its units that touch the zone, with the zone's rows they touch.
+        let mut units: Vec<[ZoneUnits; 2]> = vec![Default::default(); self.lags.len()];
+        for part in [0, 1] {
+            self.opposed_sweep(&plan, part, |unit, i, row| {
+                let touched = (row - self.spans[i]).max(zone.start)..(row + 1).min(zone.end);
+                if !touched.is_empty() {
+                    units[i][part].push((unit, touched));
+                }
+            });
+        }
+        // Per part and row of the zone: the latest unit that touches it, among the items so far.
+        let mut latest = [vec![0; zone.len()], vec![0; zone.len()]];
+        for item in &units {
+            for part in 0..2 {
+                for (unit, touched) in &item[part] {
+                    let needed = touched
+                        .clone()
+                        .map(|row| latest[1 - part][row - zone.start]);
+                    plan.waits[part].push((*unit, needed.max().unwrap_or(0)));
+                }
+            }
+            for part in 0..2 {
+                for (unit, touched) in &item[part] {
+                    for row in touched.clone() {
+                        let latest = &mut latest[part][row - zone.start];
+                        *latest = (*latest).max(*unit);
+                    }
+                }
+            }
+        }
+        for waits in &mut plan.waits {
+            waits.sort_unstable();
+        }
+        plan
+    }
+
+    /// Runs `work(item, last_row)` for part `part` (0 or 1) of `plan` in its order, waiting for the
+    /// other part where `plan` says and telling it how far this one has got in `progress`'s counter
+    /// `part` (both counters reset beforehand, [`Progress::reset_links`]). The two parts must run at
+    /// once, on threads of their own; if one panics, the other panics too.
+    pub fn run_opposed_part(
+        &self,
+        plan: &OpposedParts,
+        part: usize,
+        progress: &Progress,
+        mut work: impl FnMut(usize, usize),
+    ) {
+        let poison = progress.poison_if_unwinding();
+        let waits = &plan.waits[part];
+        let (mut next, mut seen) = (0, 0);
+        self.opposed_sweep(plan, part, |unit, i, row| {
+            let shared = waits.get(next).is_some_and(|&(u, _)| u == unit);
+            if shared && seen < waits[next].1 {
+                seen = progress.wait_at_least(1 - part, waits[next].1);
+            }
+            work(i, row);
+            if shared {
+                progress.publish(part, unit);
+                next += 1;
+            }
+        });
+        progress.publish(part, usize::MAX);
+        poison.disarm();
     }
 }
 
@@ -496,6 +661,198 @@ pub(crate) mod tests {
                             "links {sizes:?} on {threads} threads: ({i}, {ri}) after ({j}, {rj}) \
                              ({:?})",
                             place[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The order two opposed parts run their units in when the parts advance as `pick` chooses
+    /// (given the step of the simulation, which part to try first), each waiting as
+    /// [`Wavefront::run_opposed_part`] does with every wait `short` units shorter: per unit (item, last
+    /// row), its place in the joint order. `None` if the parts wait for each other for ever.
+    fn opposed_order(
+        plan: &Wavefront,
+        halves: &OpposedParts,
+        short: usize,
+        pick: impl Fn(usize) -> usize,
+    ) -> Option<HashMap<(usize, usize), usize>> {
+        let sequences: [Vec<(usize, usize, usize)>; 2] = std::array::from_fn(|part| {
+            let mut units = Vec::new();
+            plan.opposed_sweep(halves, part, |unit, i, row| units.push((unit, i, row)));
+            units
+        });
+        let (mut next, mut zone_next, mut published) = ([0; 2], [0; 2], [0; 2]);
+        let mut order = HashMap::new();
+        for clock in 0.. {
+            if next[0] == sequences[0].len() && next[1] == sequences[1].len() {
+                break;
+            }
+            let ready = |part: usize, zone_next: &[usize; 2], published: &[usize; 2]| {
+                let Some(&(unit, _, _)) = sequences[part].get(next[part]) else {
+                    return false;
+                };
+                match halves.waits[part].get(zone_next[part]) {
+                    Some(&(u, needed)) if u == unit => {
+                        published[1 - part] >= needed.saturating_sub(short)
+                    }
+                    _ => true,
+                }
+            };
+            let first = pick(clock);
+            let part = [first, 1 - first]
+                .into_iter()
+                .find(|&p| ready(p, &zone_next, &published))?;
+            let (unit, i, row) = sequences[part][next[part]];
+            assert!(
+                order.insert((i, row), clock).is_none(),
+                "({i}, {row}) ran twice"
+            );
+            if halves.waits[part]
+                .get(zone_next[part])
+                .is_some_and(|&(u, _)| u == unit)
+            {
+                published[part] = unit;
+                zone_next[part] += 1;
+            }
+            next[part] += 1;
+            if next[part] == sequences[part].len() {
+                published[part] = usize::MAX;
+            }
+        }
+        Some(order)
+    }
+
+    /// Two opposed parts run every strip once and every pair of strips that share a row in item
+    /// order, whichever part runs ahead, and never wait for each other for ever: the solver's sweeps
+    /// (one and three) and odd mixtures of spans, tall and short grids, cuts at every row of a short
+    /// grid and at the middle and near the edges of a tall one, both ways round. Checked on a
+    /// simulation of the two parts without threads, each advancing as far as it can before the
+    /// other, in turns, and at random; with every wait a unit shorter the order breaks.
+    #[test]
+    fn two_opposed_parts_run_every_pair_of_strips_sharing_a_row_in_item_order() {
+        let sweep = [0, 0, 2, 2, 1, 1, 1, 1, 1, 1, 0, 0, 0];
+        let cases: Vec<Vec<usize>> = vec![
+            substep_spans(1),
+            substep_spans(3),
+            sweep.repeat(3),
+            vec![2, 0, 1, 2, 0, 0, 2],
+            vec![1],
+            vec![0, 0],
+        ];
+        let mut shorter_broken = false;
+        for spans in cases {
+            for rows in [2, 3, 7, 30, 61] {
+                let plan = Wavefront::new(spans.clone(), rows);
+                let pairs = sharing_pairs(&spans, rows);
+                let cuts: Vec<usize> = if rows <= 7 {
+                    (0..=rows).collect()
+                } else {
+                    vec![0, 1, 2, rows / 2, rows - 2, rows - 1, rows]
+                };
+                for cut in cuts {
+                    for upward_first in [false, true] {
+                        let halves = plan.opposed_parts(cut, upward_first);
+                        let what = format!(
+                            "spans {spans:?}, {rows} rows, cut {cut}, part 0 upward {upward_first}"
+                        );
+                        let mut seed = 0x9E37_79B9_u64;
+                        let random: Vec<usize> = (0..100_000)
+                            .map(|_| {
+                                seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                                (seed >> 33) as usize % 2
+                            })
+                            .collect();
+                        let picks: [&dyn Fn(usize) -> usize; 4] =
+                            [&|_| 0, &|_| 1, &|clock| clock % 2, &|clock| {
+                                random[clock % random.len()]
+                            }];
+                        for pick in picks {
+                            let order = opposed_order(&plan, &halves, 0, pick)
+                                .unwrap_or_else(|| panic!("{what}: the parts wait for ever"));
+                            for (i, &span) in spans.iter().enumerate() {
+                                for row in span..rows {
+                                    assert!(order.contains_key(&(i, row)), "{what}: ({i}, {row})");
+                                }
+                            }
+                            for &(i, ri, j, rj) in &pairs {
+                                assert!(
+                                    order[&(i, ri)] < order[&(j, rj)],
+                                    "{what}: ({i}, {ri}) not before ({j}, {rj})"
+                                );
+                            }
+                            if let Some(order) = opposed_order(&plan, &halves, 1, pick) {
+                                shorter_broken |= pairs
+                                    .iter()
+                                    .any(|&(i, ri, j, rj)| order[&(i, ri)] > order[&(j, rj)]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            shorter_broken,
+            "waits a unit shorter would do: the check cannot fail"
+        );
+    }
+
+    /// Two opposed parts on real threads, waiting as [`Wavefront::run_opposed_part`] does, run every
+    /// strip once and every pair that shares a row in item order: one and three sub-steps, both ways
+    /// round, with a slow part 0 and with a slow part 1.
+    #[test]
+    fn two_opposed_parts_on_threads_run_every_pair_sharing_a_row_in_item_order() {
+        use std::sync::Mutex;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let rows = 40;
+        for substeps in [1, 3] {
+            let spans = substep_spans(substeps);
+            let plan = Wavefront::new(spans.clone(), rows);
+            for upward_first in [false, true] {
+                let halves = plan.opposed_parts(rows / 2, upward_first);
+                for slow_part in [0, 1] {
+                    let mut progress = Progress::default();
+                    progress.reset_links(2);
+                    let clock = AtomicUsize::new(0);
+                    let log: Vec<Mutex<Vec<usize>>> = (0..spans.len() * rows)
+                        .map(|_| Mutex::new(Vec::new()))
+                        .collect();
+                    std::thread::scope(|scope| {
+                        for part in 0..2 {
+                            let (plan, halves, progress, clock, log) =
+                                (&plan, &halves, &progress, &clock, &log);
+                            scope.spawn(move || {
+                                plan.run_opposed_part(halves, part, progress, |i, row| {
+                                    let slow = if part == slow_part { 300 } else { 0 };
+                                    for _ in 0..(row * 7 + i * 13) % 50 + slow {
+                                        std::hint::spin_loop();
+                                    }
+                                    let now = clock.fetch_add(1, Ordering::SeqCst);
+                                    log[i * rows + row].lock().unwrap().push(now);
+                                });
+                            });
+                        }
+                    });
+                    let ran: Vec<Vec<usize>> = log
+                        .into_iter()
+                        .map(|runs| runs.into_inner().unwrap())
+                        .collect();
+                    for (i, &span) in spans.iter().enumerate() {
+                        for row in 0..rows {
+                            let runs = ran[i * rows + row].len();
+                            assert_eq!(
+                                runs,
+                                usize::from(row >= span),
+                                "({i}, {row}) ran {runs} times"
+                            );
+                        }
+                    }
+                    for (i, ri, j, rj) in sharing_pairs(&spans, rows) {
+                        assert!(
+                            ran[i * rows + ri][0] < ran[j * rows + rj][0],
+                            "{substeps} sub-steps, part 0 upward {upward_first}, slow part \
+                             {slow_part}: ({i}, {ri}) after ({j}, {rj})"
                         );
                     }
                 }
