@@ -527,10 +527,13 @@ impl Simulation {
     /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
     /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass"). On a team
     /// that claims its passes they go either in parts (the rows cut between the threads, the seams
-    /// around the cuts after them) or as a chain, one pass (*link*) per thread at a time, each following
-    /// the one before down the rows ([`Wavefront::run_link`]): the chain where its links hold more
-    /// sub-steps than the parts' passes could, the seams needing rows, and only where passes in parts
-    /// fit (else sub-step by sub-step; crate README, "A chain of wavefronts").
+    /// around the cuts after them) or, where passes in parts fit but hold fewer sub-steps than one
+    /// thread's, the seams needing rows: on two threads as two opposed parts, each thread sweeping
+    /// its own half of the rows, one down and one up, and waiting for the other only across the cut
+    /// ([`Wavefront::opposed_parts`]; crate README, "Two opposed parts"); on more, as a chain, one
+    /// pass (*link*) per thread at a time, each following the one before down the rows
+    /// ([`Wavefront::run_link`]; crate README, "A chain of wavefronts"). Where no pass fits the
+    /// parts, sub-step by sub-step.
     pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
         let (iterations, pbd_stiffness) = match self.params.method {
             Method::Pbd {
@@ -1081,7 +1084,7 @@ impl Simulation {
             // On a team of two whose attachments read their own rows' pins, two parts sweeping
             // opposite ways where their passes hold more sub-steps than passes in parts would: each
             // thread keeps its own rows, as in parts, without seams to make room for (crate README,
-            // "Two parts sweeping opposite ways").
+            // "Two opposed parts").
             if let (GridSweep::Auto, Some(2), 0) = (sweep_order, chain_team, reach)
                 && in_parts
                     .as_ref()
