@@ -2275,6 +2275,34 @@ mod tests {
         assert!(fewer > 0, "some pass was cut down to fit its parts");
     }
 
+    /// The bits of a simulation's positions and velocities.
+    type StateBits = (Vec<[u64; 3]>, Vec<[u64; 3]>);
+
+    /// `sim` in a wind of `speed` m/s along x (a quarter of it along z) held for `interval` sub-steps,
+    /// swept `sweep`, after `frames` frames of a turning and swaying pole on `threads` threads: its
+    /// bits, and how its last whole step went (sub-steps a pass at most, whether as a chain, whether
+    /// as opposed parts).
+    fn whole_step_run(
+        mut sim: Simulation,
+        speed: f64,
+        interval: u32,
+        sweep: crate::sim::GridSweep,
+        threads: usize,
+        frames: usize,
+    ) -> (StateBits, (usize, bool, bool)) {
+        let method = sim.params.method;
+        sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
+        sim.params.wind.renewal_interval = held_for(interval, method);
+        sim.grid_sweep = sweep;
+        turning_pole(&mut sim, threads, frames);
+        let how = (
+            sim.wavefront_substeps_per_pass,
+            sim.wavefront_chained,
+            sim.wavefront_opposed,
+        );
+        (state_bits(&sim), how)
+    }
+
     /// A whole step as a chain of wavefronts on a team (links of 1, 2, 3 and all sub-steps, on two,
     /// three and four threads) gives the bits of pass by pass: small-steps XPBD and PBD, with the wind
     /// renewed every sub-step, held for three and off, a turning and swaying pole; XPBD with multipliers
@@ -2287,13 +2315,10 @@ mod tests {
             let whole_steps = !matches!(method, Method::Xpbd { .. });
             for (speed, interval) in winds {
                 let run = |sweep: GridSweep, threads: usize| {
-                    let mut sim = windy_flag(9, 61, 1.5, method, threads > 1);
-                    sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
-                    sim.params.wind.renewal_interval = held_for(interval, method);
-                    sim.grid_sweep = sweep;
-                    turning_pole(&mut sim, threads, 6);
-                    let run = (sim.wavefront_substeps_per_pass, sim.wavefront_chained);
-                    (state_bits(&sim), run)
+                    let sim = windy_flag(9, 61, 1.5, method, threads > 1);
+                    let (bits, (per_link, chained, _)) =
+                        whole_step_run(sim, speed, interval, sweep, threads, 6);
+                    (bits, (per_link, chained))
                 };
                 let (passes, _) = run(GridSweep::Passes, 1);
                 for threads in [2, 3, 4] {
@@ -2344,12 +2369,9 @@ mod tests {
                             sim = Simulation::new(model, sim.params.clone()).unwrap();
                             assert_eq!(sim.tether_row_reach, 1);
                         }
-                        sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
-                        sim.params.wind.renewal_interval = held_for(interval, method);
-                        sim.grid_sweep = sweep;
-                        turning_pole(&mut sim, threads, 6);
-                        let run = (sim.wavefront_substeps_per_pass, sim.wavefront_opposed);
-                        (state_bits(&sim), run)
+                        let (bits, (per_pass, _, opposed)) =
+                            whole_step_run(sim, speed, interval, sweep, threads, 6);
+                        (bits, (per_pass, opposed))
                     };
                     let (passes, _) = run(GridSweep::Passes, 1);
                     for substeps_per_pass in [1, 2, 3, 20] {
@@ -2429,16 +2451,8 @@ mod tests {
                 assert!(crate::sim::team_claims_its_passes(columns * rows, threads));
             }
             let run = |sweep: GridSweep, threads: usize| {
-                let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
-                sim.params.wind.renewal_interval = held_for(2, method);
-                sim.grid_sweep = sweep;
-                turning_pole(&mut sim, threads, 2);
-                let run = (
-                    sim.wavefront_substeps_per_pass,
-                    sim.wavefront_chained,
-                    sim.wavefront_opposed,
-                );
-                (state_bits(&sim), run)
+                let sim = windy_flag(columns, rows, 0.6, method, threads > 1);
+                whole_step_run(sim, 6.0, 2, sweep, threads, 2)
             };
             let (passes, _) = run(GridSweep::Passes, 1);
             // A sub-step keeps 12 rows in flight: its depth, 11 (the wind's 1 and a sweep's 10), and
