@@ -160,14 +160,20 @@ impl Team {
     /// anyway, and on a shared machine one core may run slower than the other, which equal parts would
     /// wait for.
     fn run(&self, len: usize, grain: usize, work: &Work<'_>) {
-        // SAFETY: only the lifetime is erased; `work` outlives the pass because this function waits for
-        // every helper to finish it before returning (also when the leader's own part panics).
-        let work: *const Work<'static> = unsafe { std::mem::transmute(work as *const Work<'_>) };
         let chunk = if self.claim.load(Ordering::Relaxed) {
             grain.max(1)
         } else {
             0
         };
+        self.run_chunked(len, chunk, work);
+    }
+
+    /// Runs `work` over `0..len` with every thread of the team, claimed in chunks of `chunk`, or with
+    /// `chunk` 0 in one equal part per thread, and returns when all parts are done.
+    fn run_chunked(&self, len: usize, chunk: usize, work: &Work<'_>) {
+        // SAFETY: only the lifetime is erased; `work` outlives the pass because this function waits for
+        // every helper to finish it before returning (also when the leader's own part panics).
+        let work: *const Work<'static> = unsafe { std::mem::transmute(work as *const Work<'_>) };
         // SAFETY: every helper has finished the previous pass (waited for below), so none reads `pass`.
         unsafe { *self.pass.get() = Pass { work, len, chunk } };
         self.next.store(0, Ordering::SeqCst);
@@ -414,6 +420,19 @@ pub(crate) fn team_in_equal_parts() -> Option<usize> {
 /// another never waits for one left unclaimed. `None` without a team.
 pub(crate) fn team_threads() -> Option<usize> {
     with_leading_team(|team| team.threads)
+}
+
+/// Runs `work(i)` for every `i` of `0..threads` on the team this thread leads, which must have
+/// `threads` threads: index `i` on the team's thread `i`, all at once, also when the team claims its
+/// passes. For passes whose indices wait for each other and keep to their own rows from pass to pass
+/// (two opposed parts: `Wavefront::run_opposed_part`).
+pub(crate) fn one_index_per_thread(threads: usize, work: impl Fn(usize) + Sync) {
+    let each = |range: Range<usize>| range.for_each(&work);
+    with_leading_team(|team| {
+        assert_eq!(team.threads, threads, "one index per thread of the team");
+        team.run_chunked(threads, 0, &each);
+    })
+    .expect("one index per thread needs a team");
 }
 
 /// Runs `work` on parts of `0..len` that together cover it once: on the team this thread leads (see

@@ -29,7 +29,9 @@ use crate::grid_wind::{
     cells_around, predict_row_with_forces, split_cell_run, split_grid_triangle_forces,
 };
 use crate::model::Spring;
-use crate::parallel::{DisjointSlice, fill, parts, team_in_equal_parts, team_threads};
+use crate::parallel::{
+    DisjointSlice, fill, one_index_per_thread, parts, team_in_equal_parts, team_threads,
+};
 use crate::params::SimParams;
 use crate::params::{Method, Wind};
 use crate::pipeline::{Pipeline, Progress, Stage};
@@ -899,6 +901,7 @@ impl Simulation {
             wavefront_substeps_per_pass,
             wavefront_chained,
             wavefront_opposed,
+            opposed_upward_first,
             ..
         } = self
         else {
@@ -1475,17 +1478,19 @@ impl Simulation {
                 return true;
             }
             if opposed {
-                for (pass, (plan, items)) in passes.iter().enumerate() {
+                for (plan, items) in &passes {
                     let run_item = |item: usize, row: usize| run_item(items, item, row);
-                    // Each pass starts on the rows the pass before ended on: the two parts reach the
-                    // middle row at the end of one pass and leave it at the start of the next.
-                    let halves = plan.opposed_parts(rows / 2, pass % 2 == 1);
+                    // Each pass starts on the rows the pass before ended on, also from step to step:
+                    // the two parts reach the middle row at the end of one pass and leave it at the
+                    // start of the next.
+                    let halves = plan.opposed_parts(rows / 2, *opposed_upward_first);
+                    *opposed_upward_first = !*opposed_upward_first;
                     progress.reset_links(2);
                     let progress = &*progress;
-                    // Two indices, one per thread of the team: claimed, the thread that took the
-                    // first cannot finish it before the other thread has taken the second.
-                    parts(2, parallel, 1, |part| {
-                        part.for_each(|p| plan.run_opposed_part(&halves, p, progress, run_item))
+                    // One part per thread of the team, the same thread for the same part from pass
+                    // to pass, and both at once: they wait for each other.
+                    one_index_per_thread(2, |part| {
+                        plan.run_opposed_part(&halves, part, progress, run_item)
                     });
                 }
                 return true;

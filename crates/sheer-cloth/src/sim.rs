@@ -232,6 +232,9 @@ pub struct Simulation {
     pub(crate) wavefront_chained: bool,
     /// Whether they ran as two parts sweeping opposite ways (`Wavefront::opposed_parts`).
     pub(crate) wavefront_opposed: bool,
+    /// Whether the next pass of two opposed parts sweeps part 0 upwards: they turn round every pass,
+    /// from step to step too, so that each pass starts on the rows the one before ended on.
+    pub(crate) opposed_upward_first: bool,
 }
 
 /// What the rows of a grid's first pass add to each particle's body force
@@ -429,6 +432,7 @@ impl Simulation {
             wavefront_substeps_per_pass: 0,
             wavefront_chained: false,
             wavefront_opposed: false,
+            opposed_upward_first: false,
             grid_triangulation,
             grid: model.grid,
             masses: model.masses,
