@@ -770,6 +770,17 @@ pub(crate) mod tests {
             vec![1],
             vec![0, 0],
         ];
+        // A fixed sequence of picks, for the parts to run ahead of each other at random.
+        let mut seed = 0x9E37_79B9_u64;
+        let random: Vec<usize> = (0..100_000)
+            .map(|_| {
+                seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                (seed >> 33) as usize % 2
+            })
+            .collect();
+        let picks: [&dyn Fn(usize) -> usize; 4] = [&|_| 0, &|_| 1, &|clock| clock % 2, &|clock| {
+            random[clock % random.len()]
+        }];
         let mut parts_with_waits = 0;
         for spans in cases {
             for rows in [2, 3, 4, 5, 6, 7, 30, 61] {
@@ -786,17 +797,6 @@ pub(crate) mod tests {
                         let what = format!(
                             "spans {spans:?}, {rows} rows, cut {cut}, part 0 upward {upward_first}"
                         );
-                        let mut seed = 0x9E37_79B9_u64;
-                        let random: Vec<usize> = (0..100_000)
-                            .map(|_| {
-                                seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-                                (seed >> 33) as usize % 2
-                            })
-                            .collect();
-                        let picks: [&dyn Fn(usize) -> usize; 4] =
-                            [&|_| 0, &|_| 1, &|clock| clock % 2, &|clock| {
-                                random[clock % random.len()]
-                            }];
                         for pick in picks {
                             let order = opposed_order(&plan, &halves, None, pick)
                                 .unwrap_or_else(|| panic!("{what}: the parts wait for ever"));
