@@ -1826,16 +1826,27 @@ mod tests {
         method: Method,
         parallel: bool,
     ) -> Simulation {
+        windy_grid(columns, rows, height, method, parallel, |model| {
+            model.with_hoist_pinned().unwrap()
+        })
+    }
+
+    /// As [`windy_flag`], with the grid pinned by `pin` instead of at the hoist.
+    fn windy_grid(
+        columns: usize,
+        rows: usize,
+        height: f64,
+        method: Method,
+        parallel: bool,
+        pin: impl FnOnce(ClothModel) -> ClothModel,
+    ) -> Simulation {
         let spec = GridSpec {
             columns,
             rows,
             height,
             ..GridSpec::default()
         };
-        let model = ClothModel::grid(&spec)
-            .unwrap()
-            .with_hoist_pinned()
-            .unwrap();
+        let model = pin(ClothModel::grid(&spec).unwrap());
         let mut params = SimParams {
             method,
             ..SimParams::default()
@@ -2360,20 +2371,15 @@ mod tests {
             for (speed, interval) in WHOLE_STEP_WINDS {
                 for every_third_row in [false, true] {
                     let run = |sweep: GridSweep, threads: usize| {
-                        let mut sim = windy_flag(9, 61, 1.5, method, threads > 1);
-                        if every_third_row {
-                            let spec = GridSpec {
-                                columns: 9,
-                                rows: 61,
-                                height: 1.5,
-                                ..GridSpec::default()
-                            };
-                            let mut model = ClothModel::grid(&spec).unwrap();
+                        let sim = windy_grid(9, 61, 1.5, method, threads > 1, |mut model| {
+                            if !every_third_row {
+                                return model.with_hoist_pinned().unwrap();
+                            }
                             let pins: Vec<usize> = (0..61).step_by(3).map(|row| row * 9).collect();
                             model.pin(&pins).unwrap();
-                            sim = Simulation::new(model, sim.params.clone()).unwrap();
-                            assert_eq!(sim.tether_row_reach, 1);
-                        }
+                            model
+                        });
+                        assert_eq!(sim.tether_row_reach, usize::from(every_third_row));
                         let (bits, (per_pass, _, opposed)) =
                             whole_step_run(sim, speed, interval, sweep, threads, 6);
                         (bits, (per_pass, opposed))
