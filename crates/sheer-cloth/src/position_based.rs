@@ -1043,10 +1043,8 @@ impl Simulation {
                 let team = chain_team.expect("the chain needs a team of threads");
                 break 'plan Some(WavefrontPlan {
                     passes: passes_of(&even(most)),
-                    parts: 1,
                     most_per_pass: most,
-                    chain_team: Some(team),
-                    opposed: false,
+                    way: PassesGo::Chain(team),
                 });
             }
             // Two parts sweeping opposite ways: each part's strips need the other's only across the
@@ -1054,10 +1052,8 @@ impl Simulation {
             // beyond their own row.
             let opposed = |most: usize| WavefrontPlan {
                 passes: passes_of(&even(most)),
-                parts: 2,
                 most_per_pass: most,
-                chain_team: None,
-                opposed: true,
+                way: PassesGo::Opposed,
             };
             if let GridSweep::Opposed { .. } = sweep_order {
                 assert_eq!(
@@ -1078,10 +1074,8 @@ impl Simulation {
                 });
                 fit.then_some(WavefrontPlan {
                     passes,
-                    parts,
                     most_per_pass: per_pass,
-                    chain_team: None,
-                    opposed: false,
+                    way: PassesGo::InParts(parts),
                 })
             });
             // On a team of two whose attachments read their own rows' pins, two parts sweeping
@@ -1109,10 +1103,8 @@ impl Simulation {
                     let longest = sizes.iter().copied().max().unwrap_or(1);
                     break 'plan Some(WavefrontPlan {
                         passes: passes_of(&sizes),
-                        parts: 1,
                         most_per_pass: longest,
-                        chain_team: Some(team),
-                        opposed: false,
+                        way: PassesGo::Chain(team),
                     });
                 }
             }
@@ -1430,16 +1422,14 @@ impl Simulation {
         }
         if let Some(WavefrontPlan {
             passes,
-            parts: parts_count,
             most_per_pass: per_pass,
-            chain_team: chain,
-            opposed,
+            way,
         }) = wavefront
         {
             if step.is_some() {
                 *wavefront_substeps_per_pass = per_pass;
-                *wavefront_chained = chain.is_some();
-                *wavefront_opposed = opposed;
+                *wavefront_chained = matches!(way, PassesGo::Chain(_));
+                *wavefront_opposed = way == PassesGo::Opposed;
             }
             let run_item =
                 |items: &[(WaveItem, usize)], item: usize, row: usize| match items[item].0 {
@@ -1458,43 +1448,46 @@ impl Simulation {
                         }
                     }
                 };
-            if let Some(team) = chain {
-                // Link `k` on thread `k mod team`, each thread's links in order: one index per thread
-                // of the team, which, also when its threads claim indices one by one, leaves none
-                // unclaimed while the others wait (`team_threads`).
-                progress.reset_links(passes.len());
-                let progress = &*progress;
-                parts(team, parallel, 1, |threads| {
-                    threads.for_each(|thread| {
-                        for link in (thread..passes.len()).step_by(team) {
-                            let (plan, items) = &passes[link];
-                            let previous = link.checked_sub(1).map(|before| &passes[before].0);
-                            plan.run_link(link, previous, progress, |item, row| {
-                                run_item(items, item, row)
-                            });
-                        }
-                    })
-                });
-                return true;
-            }
-            if opposed {
-                for (plan, items) in &passes {
-                    let run_item = |item: usize, row: usize| run_item(items, item, row);
-                    // Each pass starts on the rows the pass before ended on, also from step to step:
-                    // the two parts reach the middle row at the end of one pass and leave it at the
-                    // start of the next.
-                    let halves = plan.opposed_parts(rows / 2, *opposed_upward_first);
-                    *opposed_upward_first = !*opposed_upward_first;
-                    progress.reset_links(2);
+            let parts_count = match way {
+                PassesGo::InParts(parts) => parts,
+                PassesGo::Chain(team) => {
+                    // Link `k` on thread `k mod team`, each thread's links in order: one index per
+                    // thread of the team, which, also when its threads claim indices one by one,
+                    // leaves none unclaimed while the others wait (`team_threads`).
+                    progress.reset_links(passes.len());
                     let progress = &*progress;
-                    // One part per thread of the team, the same thread for the same part from pass
-                    // to pass, and both at once: they wait for each other.
-                    one_index_per_thread(2, |part| {
-                        plan.run_opposed_part(&halves, part, progress, run_item)
+                    parts(team, parallel, 1, |threads| {
+                        threads.for_each(|thread| {
+                            for link in (thread..passes.len()).step_by(team) {
+                                let (plan, items) = &passes[link];
+                                let previous = link.checked_sub(1).map(|before| &passes[before].0);
+                                plan.run_link(link, previous, progress, |item, row| {
+                                    run_item(items, item, row)
+                                });
+                            }
+                        })
                     });
+                    return true;
                 }
-                return true;
-            }
+                PassesGo::Opposed => {
+                    for (plan, items) in &passes {
+                        let run_item = |item: usize, row: usize| run_item(items, item, row);
+                        // Each pass starts on the rows the pass before ended on, also from step to
+                        // step: the two parts reach the middle row at the end of one pass and leave
+                        // it at the start of the next.
+                        let halves = plan.opposed_parts(rows / 2, *opposed_upward_first);
+                        *opposed_upward_first = !*opposed_upward_first;
+                        progress.reset_links(2);
+                        let progress = &*progress;
+                        // One part per thread of the team, the same thread for the same part from
+                        // pass to pass, and both at once: they wait for each other.
+                        one_index_per_thread(2, |part| {
+                            plan.run_opposed_part(&halves, part, progress, run_item)
+                        });
+                    }
+                    return true;
+                }
+            };
             for (plan, items) in &passes {
                 let run_item = |item: usize, row: usize| run_item(items, item, row);
                 // Each part's own strips need nothing across a cut, so the parts run at once; the seams
@@ -1535,14 +1528,21 @@ impl Simulation {
 struct WavefrontPlan {
     /// Each pass (a chain's link) and its items.
     passes: Vec<(Wavefront, Vec<(WaveItem, usize)>)>,
-    /// The parts each pass cuts the rows into (1 in a chain).
-    parts: usize,
     /// The most sub-steps a pass (or link) holds.
     most_per_pass: usize,
-    /// In a chain, the team's threads that its links go to in turn.
-    chain_team: Option<usize>,
-    /// Whether each pass goes as two parts sweeping opposite ways (`Wavefront::opposed_parts`).
-    opposed: bool,
+    /// How the passes share out the rows among the threads.
+    way: PassesGo,
+}
+
+/// How the passes of a [`WavefrontPlan`] share out the rows among the threads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum PassesGo {
+    /// Each pass cut into this many parts, the seams around the cuts after them (`Wavefront::run_part`).
+    InParts(usize),
+    /// As a chain of links, link `k` on thread `k mod` this team's threads (`Wavefront::run_link`).
+    Chain(usize),
+    /// Each pass as two opposed parts on a team of two threads (`Wavefront::opposed_parts`).
+    Opposed,
 }
 
 /// What an item of a grid sub-step's wavefront ([`Wavefront`]) does on its last row.
