@@ -567,8 +567,7 @@ impl Simulation {
             && (pipeline || wavefront)
             && !(self.wind_acts() && self.grid_triangulation.is_none());
         self.wavefront_substeps_per_pass = 0;
-        self.wavefront_chained = false;
-        self.wavefront_opposed = false;
+        self.wavefront_way = None;
         if !eligible {
             return false;
         }
@@ -899,8 +898,7 @@ impl Simulation {
             progress,
             pipeline_plan,
             wavefront_substeps_per_pass,
-            wavefront_chained,
-            wavefront_opposed,
+            wavefront_way,
             opposed_upward_first,
             ..
         } = self
@@ -1428,8 +1426,7 @@ impl Simulation {
         {
             if step.is_some() {
                 *wavefront_substeps_per_pass = per_pass;
-                *wavefront_chained = matches!(way, PassesGo::Chain(_));
-                *wavefront_opposed = way == PassesGo::Opposed;
+                *wavefront_way = Some(way);
             }
             let run_item =
                 |items: &[(WaveItem, usize)], item: usize, row: usize| match items[item].0 {
@@ -1536,7 +1533,7 @@ struct WavefrontPlan {
 
 /// How the passes of a [`WavefrontPlan`] share out the rows among the threads.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum PassesGo {
+pub(crate) enum PassesGo {
     /// Each pass cut into this many parts, the seams around the cuts after them (`Wavefront::run_part`).
     InParts(usize),
     /// As a chain of links, link `k` on thread `k mod` this team's threads (`Wavefront::run_link`).
@@ -2313,8 +2310,8 @@ mod tests {
         turning_pole(&mut sim, threads, frames);
         let how = (
             sim.wavefront_substeps_per_pass,
-            sim.wavefront_chained,
-            sim.wavefront_opposed,
+            matches!(sim.wavefront_way, Some(super::PassesGo::Chain(_))),
+            sim.wavefront_way == Some(super::PassesGo::Opposed),
         );
         (state_bits(&sim), how)
     }

@@ -228,10 +228,8 @@ pub struct Simulation {
     /// How many sub-steps each pass of the last whole step's wavefront ran at most (0: the last step ran
     /// none): for the tests to know what they compared.
     pub(crate) wavefront_substeps_per_pass: usize,
-    /// Whether those wavefronts ran as a chain on the team's threads (`Wavefront::run_link`).
-    pub(crate) wavefront_chained: bool,
-    /// Whether they ran as two parts sweeping opposite ways (`Wavefront::opposed_parts`).
-    pub(crate) wavefront_opposed: bool,
+    /// How those wavefronts shared out the rows among the threads (`None`: the last step ran none).
+    pub(crate) wavefront_way: Option<crate::position_based::PassesGo>,
     /// Whether the next pass of two opposed parts sweeps part 0 upwards: they turn round every pass,
     /// from step to step too, so that each pass starts on the rows the one before ended on.
     pub(crate) opposed_upward_first: bool,
@@ -430,8 +428,7 @@ impl Simulation {
             grid_sweep: GridSweep::Auto,
             skip_switched_off_families: true,
             wavefront_substeps_per_pass: 0,
-            wavefront_chained: false,
-            wavefront_opposed: false,
+            wavefront_way: None,
             opposed_upward_first: false,
             grid_triangulation,
             grid: model.grid,
