@@ -13,60 +13,34 @@ use std::ops::Range;
 use glam::DVec3;
 
 use crate::parallel::DisjointSlice;
+use crate::staggered::Staggered;
 use crate::vectorise::by_cpu;
 
-/// Unused `f64` allocated after each component: one 4 KiB page.
+/// Owned vectors split by component, each a [`Staggered`] array: it starts on a line of its page of its
+/// own and is followed by a page of unused capacity ([`GAP`](crate::staggered::GAP)).
 ///
-/// Allocated one after another, the components lay end to start: the last rows of a grid's x (which the
-/// last thread of a team works on) shared cache lines and a page with the first rows of its y (the first
-/// thread's), and so on. A thread reading its rows there, with the hardware prefetcher running on
-/// within the page, took lines the other thread was writing, every sub-step. With the time of each
-/// row's items counted by `rdtsc` (a temporary instrumentation of the pipeline, `fingerprint time 64x46
-/// 2 1000`, five runs), the first three rows took 1.3–4.1× as long as the rows below them and the last
-/// two 1.15–1.6×; with the gap, as long as the rest. The frame: 0.95× as long (median of 30 interleaved
-/// runs of `fingerprint time 64x46 2 200`, quartiles 0.91 and 1.01).
-const GAP: usize = 4096 / std::mem::size_of::<f64>();
-
-/// Owned vectors split by component; each component is followed by [`GAP`] unused `f64` of capacity.
-#[derive(Debug, Default)]
+/// The gap: allocated one after another, the components lay end to start: the last rows of a grid's x
+/// (which the last thread of a team works on) shared cache lines and a page with the first rows of its
+/// y (the first thread's), and so on. A thread reading its rows there, with the hardware prefetcher
+/// running on within the page, took lines the other thread was writing, every sub-step. With the time
+/// of each row's items counted by `rdtsc` (a temporary instrumentation of the pipeline, `fingerprint
+/// time 64x46 2 1000`, five runs), the first three rows took 1.3–4.1× as long as the rows below them
+/// and the last two 1.15–1.6×; with the gap, as long as the rest. The frame: 0.95× as long (median of
+/// 30 interleaved runs of `fingerprint time 64x46 2 200`, quartiles 0.91 and 1.01).
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Xyz {
-    pub x: Vec<f64>,
-    pub y: Vec<f64>,
-    pub z: Vec<f64>,
-}
-
-/// `n` zeros followed by [`GAP`] unused `f64` of capacity.
-fn spaced_zeros(n: usize) -> Vec<f64> {
-    let mut v = Vec::with_capacity(n + GAP);
-    v.resize(n, 0.0);
-    v
-}
-
-/// A copy of `v` followed by [`GAP`] unused `f64` of capacity.
-fn spaced_copy(v: &[f64]) -> Vec<f64> {
-    let mut copy = Vec::with_capacity(v.len() + GAP);
-    copy.extend_from_slice(v);
-    copy
-}
-
-impl Clone for Xyz {
-    /// Keeps the gap after each component (a derived clone would allocate exactly the length).
-    fn clone(&self) -> Self {
-        Xyz {
-            x: spaced_copy(&self.x),
-            y: spaced_copy(&self.y),
-            z: spaced_copy(&self.z),
-        }
-    }
+    pub x: Staggered,
+    pub y: Staggered,
+    pub z: Staggered,
 }
 
 impl Xyz {
     /// `n` zero vectors.
     pub(crate) fn zeros(n: usize) -> Xyz {
         Xyz {
-            x: spaced_zeros(n),
-            y: spaced_zeros(n),
-            z: spaced_zeros(n),
+            x: Staggered::zeros(n),
+            y: Staggered::zeros(n),
+            z: Staggered::zeros(n),
         }
     }
 
@@ -296,7 +270,7 @@ mod tests {
         for copy in [&state, &state.clone()] {
             for component in [&copy.x, &copy.y, &copy.z] {
                 assert_eq!(component.len(), 2944);
-                assert!(component.capacity() >= 2944 + GAP);
+                assert!(component.spare_capacity() >= crate::staggered::GAP);
             }
         }
         let vectors: Vec<DVec3> = (0..5).map(|i| DVec3::splat(i as f64)).collect();

@@ -34,6 +34,7 @@ mod params;
 mod pipeline;
 mod position_based;
 mod sim;
+mod staggered;
 #[cfg(target_arch = "x86_64")]
 mod strips_avx512;
 mod vectorise;
