@@ -4,15 +4,18 @@
 //! `cargo run -p sheer-cloth --release --example fingerprint` waves the default flag, a larger grid and
 //! a long narrow one with five methods, the wind updated every sub-step and every 4, on one thread and
 //! on two; then a general triangle mesh, a grid without wind, and a grid of 262 144 particles, large
-//! enough for the wavefronts of several sub-steps a pass on both thread counts (small-steps XPBD ×20, three frames). Each case prints a hash of the final positions and
-//! velocities (and of the frame a run diverged at, if it did), and `TOTAL` hashes them all: two builds
-//! with the same `TOTAL` gave the same bits in every case.
+//! enough for the wavefronts of several sub-steps a pass on both thread counts (small-steps XPBD ×20,
+//! three frames). Each case prints a hash of the final positions and velocities (and of the frame a run
+//! diverged at, if it did), and `TOTAL` hashes them all: two builds with the same `TOTAL` gave the same
+//! bits in every case.
 //!
 //! `cargo run -p sheer-cloth --release --example fingerprint -- time 64x46 2 150` prints the mean
-//! milliseconds per 60 Hz frame of small-steps XPBD ×20 on that grid (hoist pinned, 6 m/s wind) with
-//! that many threads (two or more: the parallel code paths forced on) over that many frames, after ten
-//! frames of warm-up. Copy this file into another checkout's `crates/sheer-cloth/examples/` to build
-//! the same program against another version of the library.
+//! milliseconds per 60 Hz frame of small-steps XPBD ×20 on that grid (hoist pinned, 6 m/s wind with its
+//! forces renewed every sub-step, where `SimParams::waving_flag` holds them up to 2 ms, so a frame here
+//! takes longer than `sheer bench sim`'s on the same grid) with that many threads (two or more: the
+//! parallel code paths forced on) over that many frames, after ten frames of warm-up. Copy this file
+//! into another checkout's `crates/sheer-cloth/examples/` to build the same program against another
+//! version of the library.
 //!
 //! `cargo run -p sheer-cloth --release --example fingerprint -- threads 1,2,4,8,16` runs nine cases
 //! (teams in equal parts, claimed opposed parts, chains and parts, the triangle path; small-steps
