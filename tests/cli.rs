@@ -331,11 +331,218 @@ fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
         "--out-dir",
         dir.to_str().unwrap(),
     ]);
+    // Frame 0 is the flag at rest, so step 45 would have made frame 46. The message names the limit
+    // that tripped, its key, the remedies for it, and the frames that are complete.
     assert!(
-        stderr.starts_with("error: frame 45: step 45 diverged: ")
-            && stderr.contains("more sub-steps a frame"),
+        stderr.starts_with("error: frame 46: simulation: step 45 diverged: ")
+            && stderr.contains("`simulation.divergence.max_strain` = 10")
+            && stderr.contains("More sub-steps (`simulation.method.substeps`, now 40)")
+            && stderr.contains("frame_0000.obj … frame_0045.obj (46 of 60 frames)"),
         "{stderr}"
     );
+    assert!(!stderr.contains("last good state"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A flag in a 60 m/s wind trips the speed limit: more sub-steps cannot help there (100 to 1000 of them
+/// all failed the same way), so the message names `simulation.divergence.max_speed` and the wind, and
+/// does not advise sub-steps.
+#[test]
+fn a_flag_too_fast_for_the_speed_limit_is_told_about_the_speed_limit() {
+    let dir = scratch("storm");
+    let scene = dir.join("storm.scene.toml");
+    std::fs::write(&scene, "[simulation.wind]\nvelocity = [60.0, 0.0, 0.0]\n").unwrap();
+    let stderr = sheer_error(&[
+        "simulate",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        "300",
+        "--out-dir",
+        dir.join("frames").to_str().unwrap(),
+    ]);
+    assert!(
+        stderr.contains("`simulation.divergence.max_speed` = 200 m/s")
+            && stderr.contains("raise `simulation.divergence.max_speed`")
+            && stderr.contains("lower the wind")
+            && !stderr.contains("sub-steps"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A fresh, empty folder under the system's temporary folder.
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("sheer-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The names in `dir`, sorted.
+fn names_in(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    names
+}
+
+/// The vertex lines of an OBJ frame of the default flag, after checking that the frame is whole: a
+/// header, 64 × 46 vertices and texture coordinates, 2 × 63 × 45 faces, a final newline.
+fn whole_obj_vertices(path: &std::path::Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(
+        text.starts_with("# sheer frame ") && text.ends_with('\n'),
+        "{path:?}"
+    );
+    let count = |prefix: &str| text.lines().filter(|l| l.starts_with(prefix)).count();
+    assert_eq!(
+        (count("v "), count("vt "), count("f ")),
+        (64 * 46, 64 * 46, 2 * 63 * 45),
+        "{path:?} is not a whole frame"
+    );
+    text.lines()
+        .filter(|l| l.starts_with("v "))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Starts a long `sheer simulate` into `dir` and waits until it has written at least three frames.
+fn long_simulation(dir: &std::path::Path) -> std::process::Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_sheer"))
+        .args(["simulate", "--frames", "1000000", "--out-dir"])
+        .arg(dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the sheer binary runs");
+    let start = std::time::Instant::now();
+    while names_in(dir)
+        .iter()
+        .filter(|n| n.starts_with("frame_"))
+        .count()
+        < 3
+    {
+        assert!(start.elapsed().as_secs() < 120, "no frames after 2 minutes");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child
+}
+
+/// Ctrl-C during `sheer simulate` ends it after the frame being written: every file under a frame's
+/// name is whole, no partial file is left, and the one-line error says how far it got. Killed outright
+/// (SIGKILL, no chance to finish), a run still leaves only whole files under frame names.
+#[test]
+fn an_interrupted_sequence_leaves_only_whole_frames_and_says_how_far_it_got() {
+    for trial in 0..3 {
+        let dir = scratch(&format!("interrupt-{trial}"));
+        let child = long_simulation(&dir);
+        let status = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        let names = names_in(&dir);
+        let last = names.last().unwrap();
+        assert!(
+            stderr.starts_with("error: interrupted: frame_000000.obj … ")
+                && stderr.contains(&format!("{last} ({} of 1000000 frames)", names.len())),
+            "{stderr} / {names:?}"
+        );
+        for (frame, name) in names.iter().enumerate() {
+            assert_eq!(name, &format!("frame_{frame:06}.obj"));
+            whole_obj_vertices(&dir.join(name));
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    let dir = scratch("killed");
+    let mut child = long_simulation(&dir);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    for name in names_in(&dir) {
+        if name.starts_with("frame_") {
+            whole_obj_vertices(&dir.join(&name));
+        } else {
+            assert!(
+                name.starts_with(".frame_") && name.contains(".obj.part-"),
+                "{name}"
+            );
+        }
+    }
+    // --overwrite clears the killed run's frames and its partial file.
+    sheer_ok(&[
+        "simulate",
+        "--frames",
+        "2",
+        "--overwrite",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(names_in(&dir), ["frame_0000.obj", "frame_0001.obj"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A second sequence into a folder of frames is refused, naming --overwrite, and changes nothing;
+/// with --overwrite the old frames go first, so no stale frame sits beside the new ones.
+#[test]
+fn a_sequence_into_a_folder_of_frames_is_refused_unless_overwritten() {
+    let dir = scratch("overwrite");
+    let out = dir.to_str().unwrap();
+    sheer_ok(&["simulate", "--frames", "20", "--out-dir", out]);
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    let stderr = sheer_error(&["simulate", "--frames", "5", "--out-dir", out]);
+    assert!(
+        stderr.contains("already holds 20 frame file(s)") && stderr.contains("--overwrite"),
+        "{stderr}"
+    );
+    assert_eq!(names_in(&dir).len(), 21);
+    sheer_ok(&["simulate", "--frames", "5", "--overwrite", "--out-dir", out]);
+    let expected: Vec<String> = (0..5)
+        .map(|f| format!("frame_{f:04}.obj"))
+        .chain(["notes.txt".to_string()])
+        .collect();
+    assert_eq!(names_in(&dir), expected);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// One clock: frame k of a sequence is the scene after round(T·fps) + k frames of 1/fps, whatever
+/// the sequence's start: `--time 0.5` of 3 frames gives the same particles, bit for bit (positions
+/// are written in their shortest round-trip form), as frames 30–32 of a run from 0.
+#[test]
+fn a_sequence_from_a_later_time_continues_the_same_flag_bit_for_bit() {
+    let dir = scratch("clock");
+    let (from_zero, from_half) = (dir.join("zero"), dir.join("half"));
+    sheer_ok(&[
+        "simulate",
+        "--frames",
+        "33",
+        "--out-dir",
+        from_zero.to_str().unwrap(),
+    ]);
+    sheer_ok(&[
+        "simulate",
+        "--frames",
+        "3",
+        "--time",
+        "0.5",
+        "--out-dir",
+        from_half.to_str().unwrap(),
+    ]);
+    for k in 0..3 {
+        assert_eq!(
+            whole_obj_vertices(&from_half.join(format!("frame_{k:04}.obj"))),
+            whole_obj_vertices(&from_zero.join(format!("frame_{:04}.obj", 30 + k))),
+            "frame {k}"
+        );
+    }
+    // Frame 0 is the flag at rest, the hoist pinned at the top.
+    let rest = whole_obj_vertices(&from_zero.join("frame_0000.obj"));
+    assert_eq!(rest[0], "v 0.0 0.8 0.0");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -627,6 +834,16 @@ fn slab_refuses_a_bad_model_a_bad_table_and_rows_outside_the_table() {
         &sheer(&["slab", binary.to_str().unwrap()]),
         1,
         &["reading", "binary.csv", "UTF-8"],
+    );
+    // Output numbers in their shortest round-trip form: 1e308 as such, not with 309 digits.
+    std::fs::write(&input, "1e308,1,0.5,0.5\n").unwrap();
+    let (rows, _) = sheer_ok(&["slab", path]);
+    assert!(
+        rows.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("1e308,1.0,0.5,0.5,"),
+        "{rows}"
     );
     // A huge τ1 is echoed in its shortest form.
     std::fs::write(&input, "1e308,1,0.5,0.5\n").unwrap();

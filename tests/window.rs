@@ -123,3 +123,29 @@ fn a_screenshot_that_cannot_be_written_fails_the_scripted_run() {
     assert!(!jpg.exists(), "a refused screenshot left a file");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// On a screen too small to leave room for the image beside the panel, a scripted screenshot is
+/// refused with a message that says so (it saved the panel alone, and exited 0).
+#[test]
+fn a_window_too_small_for_the_image_says_so() {
+    let _display = DISPLAY.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = std::env::temp_dir().join(format!("sheer-window-small-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let shot = dir.join("small.png");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 200x150x24"])
+        .arg(env!("CARGO_BIN_EXE_sheer"))
+        .args(["--frames", "3", "--screenshot"])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run must be installed (Debian package xvfb; .ci/run installs it)");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let last = stderr.lines().last().unwrap_or("");
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        last.starts_with("error: --screenshot: the window leaves ") && last.contains("too small"),
+        "{stderr}"
+    );
+    assert!(!shot.exists(), "a screenshot without the image was saved");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

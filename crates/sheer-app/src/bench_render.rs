@@ -48,7 +48,6 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
-    let dt = 1.0 / flag.scene.render.fps;
     use AllOrdersLookup::{Fragment as TablePerFragment, Vertex as TablePerVertex};
     use EvaluationPathName::{Cpu, Fragment, Vertex};
     use Scattering::{AllOrders, Single};
@@ -112,7 +111,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     for case in 0..cases.len() {
         select(&mut renderer, &mut flag, case)?;
         for _ in 0..3 {
-            flag.advance(dt, &mut StageTimes::default())?;
+            flag.advance_frame(&mut StageTimes::default())?;
             renderer.render(&flag, &mut StageTimes::default())?;
         }
     }
@@ -125,7 +124,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             let start = Instant::now();
             for _ in 0..FRAMES_PER_ROUND {
                 let mut times = StageTimes::default();
-                flag.advance(dt, &mut times)?;
+                flag.advance_frame(&mut times)?;
                 renderer.render(&flag, &mut times)?;
                 row.stages.simulation += times.simulation;
                 row.stages.normals += times.normals;
@@ -195,11 +194,12 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         );
         let single = against_single(row);
         if args.csv {
+            // CSV numbers in their shortest round-trip form.
             outln!(
-                "{},{w},{h},{fps:.2},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.3}",
+                "{},{w},{h},{fps:?},{:?},{},{:?},{:?},{:?},{:?},{:?}",
                 row.name,
                 baseline_fps / fps,
-                single.map_or(String::new(), |r| format!("{r:.3}")),
+                single.map_or(String::new(), |r| format!("{r:?}")),
                 values.0,
                 values.1,
                 values.2,

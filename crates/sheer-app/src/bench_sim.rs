@@ -314,10 +314,11 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                         method.substeps(),
                         method.iterations(),
                         t,
+                        // CSV numbers in their shortest round-trip form.
                         m.ms_per_frame
-                            .map_or("diverged".into(), |v| format!("{v:.4}")),
+                            .map_or("diverged".into(), |v| format!("{v:?}")),
                         m.particle_substeps_per_s()
-                            .map_or("diverged".into(), |v| format!("{v:.4e}"))
+                            .map_or("diverged".into(), |v| format!("{v:?}"))
                     );
                 } else {
                     let _ = write!(

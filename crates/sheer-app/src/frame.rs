@@ -42,8 +42,8 @@ pub struct FlagScene {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     pub mesh: SlabMesh,
-    /// Scene time, s.
-    pub time: f32,
+    /// Frames advanced since time 0: the scene's one clock (see [`FlagScene::time`]).
+    frame: u64,
 }
 
 impl FlagScene {
@@ -94,15 +94,37 @@ impl FlagScene {
                 .collect(),
             normals: vec![Vec3::Z; n],
             mesh,
-            time: 0.0,
+            frame: 0,
         };
         flag.update_normals()?;
         Ok(flag)
     }
 
+    /// Scene time, s: `frame / fps` in double precision, the one clock of `simulate`, `render`, the
+    /// window and `bench` (summing a single-precision 1/60 drew the light 2.8 s late at 3600 s).
+    pub fn time(&self) -> f64 {
+        self.frame as f64 / f64::from(self.scene.render.fps)
+    }
+
+    /// Frames advanced since time 0.
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// The simulation step of one frame, s: `1/fps` in double precision, the same in every command, so
+    /// that `simulate` and `render` of one scene give the same particles bit for bit.
+    pub fn frame_duration(&self) -> f64 {
+        1.0 / f64::from(self.scene.render.fps)
+    }
+
+    /// The simulation, when the scene has a flag (not a static sheet).
+    pub fn simulation(&self) -> Option<&Simulation> {
+        self.simulation.as_ref()
+    }
+
     /// Light position now, m.
     pub fn light_position(&self) -> Vec3 {
-        Vec3::from_array(self.scene.light.position(self.time))
+        Vec3::from_array(self.scene.light.position(self.time()))
     }
 
     /// Back to time 0 and the flag at rest.
@@ -110,7 +132,7 @@ impl FlagScene {
         if let Some(sim) = &mut self.simulation {
             sim.reset();
         }
-        self.time = 0.0;
+        self.frame = 0;
         self.copy_positions();
         self.update_normals()
     }
@@ -140,15 +162,20 @@ impl FlagScene {
         Ok(())
     }
 
-    /// Advances the scene by `dt` seconds: simulation step, then normals. A diverged step is reported
-    /// ([`step_failure`]) and leaves the last good state.
-    pub fn advance(&mut self, dt: f32, times: &mut StageTimes) -> Result<(), CliError> {
+    /// Advances the scene by one frame ([`Self::frame_duration`]): simulation step, then normals. A
+    /// diverged step is reported ([`step_failure`]) and leaves the last good state.
+    pub fn advance_frame(&mut self, times: &mut StageTimes) -> Result<(), CliError> {
         let start = Instant::now();
+        let dt = self.frame_duration();
         if let Some(sim) = &mut self.simulation {
-            sim.step(f64::from(dt))
-                .map_err(|e| CliError::new(format!("simulation: {}", step_failure(&e))))?;
+            sim.step(dt).map_err(|e| {
+                CliError::new(format!(
+                    "simulation: {}",
+                    step_failure(&e, &self.scene.simulation)
+                ))
+            })?;
         }
-        self.time += dt;
+        self.frame += 1;
         self.copy_positions();
         times.simulation = start.elapsed();
         let start = Instant::now();
@@ -171,15 +198,43 @@ impl FlagScene {
     }
 }
 
-/// What went wrong in a step, for a person: a divergence with what keeps it away (the flag's known
-/// failure regions: more sub-steps, a coarser grid, less wind; crates/sheer-cloth/README.md).
-pub fn step_failure(error: &sheer_cloth::StepError) -> String {
-    match error {
-        sheer_cloth::StepError::Diverged { .. } => format!(
-            "{error} (more sub-steps a frame, fewer columns or less wind keep it away: \
-             crates/sheer-cloth/README.md, \"Known failure regions\")"
+/// What went wrong in a step, for a person: which limit tripped, its scene key, and only the remedies
+/// that address that cause (`params`: the simulation that failed, for the numbers the advice names).
+/// The command that reports it stops, so the message does not promise a kept state.
+pub fn step_failure(error: &sheer_cloth::StepError, params: &sheer_cloth::SimParams) -> String {
+    use sheer_cloth::DivergenceReason;
+    let sheer_cloth::StepError::Diverged { step, reason } = error else {
+        return error.to_string();
+    };
+    let substeps = params.method.substeps();
+    let wind = params.wind.velocity.length();
+    let peak_wind = wind * (1.0 + params.wind.gust_strength);
+    match reason {
+        DivergenceReason::Speed {
+            particle,
+            speed,
+            limit,
+        } => format!(
+            "step {step} diverged: particle {particle} moved at {speed:.3e} m/s, above \
+             `simulation.divergence.max_speed` = {limit} m/s. The wind peaks near {peak_wind:.3} m/s \
+             (`simulation.wind.velocity`, `gust_strength`): if the cloth may really move that fast, \
+             raise `simulation.divergence.max_speed`; otherwise lower the wind"
         ),
-        _ => error.to_string(),
+        DivergenceReason::Strain {
+            spring,
+            strain,
+            limit,
+        } => format!(
+            "step {step} diverged: spring {spring} stretched by {strain:.3e}, above \
+             `simulation.divergence.max_strain` = {limit}: the solver did not hold the cloth together \
+             at this step size. More sub-steps (`simulation.method.substeps`, now {substeps}), fewer \
+             `flag.columns` or less wind (now {wind:.3} m/s) keep it away"
+        ),
+        DivergenceReason::NonFinite { particle } => format!(
+            "step {step} diverged: particle {particle} reached a non-finite position or velocity (the \
+             integration blew up). More sub-steps (`simulation.method.substeps`, now {substeps}), fewer \
+             `flag.columns` or less wind (`simulation.wind.velocity`, now {wind:.3} m/s) keep it away"
+        ),
     }
 }
 

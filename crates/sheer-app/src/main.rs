@@ -8,8 +8,10 @@ mod bench_memory;
 mod bench_render;
 mod bench_sim;
 mod frame;
+mod output;
 mod render_cmd;
 mod scene;
+mod sequence;
 mod simulate;
 mod slab_cmd;
 mod window;
@@ -29,68 +31,6 @@ macro_rules! outln {
     }};
 }
 pub(crate) use outln;
-
-/// Creates the output folder `dir` (and its parents) and checks that a file can be written in it,
-/// before any work (a render of an hour of flag found out only at its first frame). A file already
-/// there is named as such: the system's own message for it, "File exists", reads as if the folder were
-/// the problem.
-pub fn create_output_dir(dir: &std::path::Path) -> Result<(), CliError> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(CliError::new(format!(
-            "cannot use {} as the output folder: it is a file",
-            dir.display()
-        )));
-    }
-    std::fs::create_dir_all(dir)
-        .map_err(|e| CliError::new(format!("cannot create {}: {e}", dir.display())))?;
-    probe_write(dir)
-}
-
-/// Checks, before any work, that the file `path` can be written: a file there opens for writing (and
-/// is left as it is), or one can be created there (and is removed again); a folder there is refused.
-pub fn check_output_file(path: &std::path::Path) -> Result<(), CliError> {
-    let refused =
-        |e: std::io::Error| CliError::new(format!("cannot write {}: {e}", path.display()));
-    if path.is_dir() {
-        return Err(CliError::new(format!(
-            "cannot write {}: it is a folder",
-            path.display()
-        )));
-    }
-    if path.exists() {
-        // Not truncated: `/dev/stdout` or a file that a failed run should not empty.
-        return std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
-            .map(drop)
-            .map_err(refused);
-    }
-    let folder = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => std::path::Path::new("."),
-    };
-    if !folder.is_dir() {
-        return Err(CliError::new(format!(
-            "cannot write {}: there is no folder {}",
-            path.display(),
-            folder.display()
-        )));
-    }
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(path)
-        .and_then(|_| std::fs::remove_file(path))
-        .map_err(refused)
-}
-
-/// Writes and removes an empty file in `folder`.
-fn probe_write(folder: &std::path::Path) -> Result<(), CliError> {
-    let probe = folder.join(format!(".sheer-write-check-{}", std::process::id()));
-    std::fs::write(&probe, b"")
-        .and_then(|()| std::fs::remove_file(&probe))
-        .map_err(|e| CliError::new(format!("cannot write into {}: {e}", folder.display())))
-}
 
 /// A one-line, user-facing error.
 #[derive(Debug)]
@@ -262,7 +202,7 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_cmd::run_render(args),
         Some(Command::Figure2(args)) => render_cmd::run_figure2(args),
         Some(Command::Slab(args)) => slab_cmd::run(args),
-        Some(Command::Assets(args)) => create_output_dir(&args.out).and_then(|()| {
+        Some(Command::Assets(args)) => output::create_output_dir(&args.out).and_then(|()| {
             assets::write_assets(&args.out).map_err(|e| CliError::new(e.to_string()))
         }),
         Some(Command::Simulate(args)) => simulate::run(args),

@@ -10,7 +10,9 @@ use sheer_slab::render::{LinearImage, save_image_file};
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
+use crate::output::FrameNames;
 use crate::scene::{Scattering, Scene, ShadingModel};
+use crate::sequence::{Sequence, advance_to, run_sequence};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ImageFormat {
@@ -39,9 +41,13 @@ pub struct RenderArgs {
         allow_negative_numbers = true
     )]
     pub frames: Option<u32>,
-    /// Directory for frame_0000.png … of a sequence.
+    /// Directory for frame_0000.png … of a sequence (numbers padded to the last frame's width). A
+    /// folder that already holds frame_*.png or frame_*.exr files is refused unless --overwrite.
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
+    /// Remove the frame_*.png and frame_*.exr files already in --out-dir first.
+    #[arg(long, requires = "out_dir")]
+    pub overwrite: bool,
     /// Image format of a sequence (a single --out frame takes its format from the extension).
     #[arg(long, value_enum, default_value_t = ImageFormat::Png, conflicts_with = "out")]
     pub format: ImageFormat,
@@ -52,17 +58,16 @@ pub struct RenderArgs {
 }
 
 /// `--time` of a single `sheer render` frame when none is given, s.
-pub const DEFAULT_FRAME_TIME_S: f32 = 2.0;
+pub const DEFAULT_FRAME_TIME_S: f64 = 2.0;
 
 /// Latest scene time a frame may be rendered at, s: an hour of simulated flag (216 000 frames at
 /// 60 Hz) is already minutes of computing.
-pub const MAX_SCENE_TIME_S: f32 = 3600.0;
+pub const MAX_SCENE_TIME_S: f64 = 3600.0;
 
-/// Checks a `--time` argument, finite and in [0, [`MAX_SCENE_TIME_S`]], and returns it as the scene's
-/// f32 seconds. Parsed as f64 so that a value past f32's range is echoed as written, not as `inf`.
-pub fn check_time(time: f64) -> Result<f32, CliError> {
-    if time.is_finite() && (0.0..=f64::from(MAX_SCENE_TIME_S)).contains(&time) {
-        Ok(time as f32)
+/// Checks a `--time` argument: finite and in [0, [`MAX_SCENE_TIME_S`]] s.
+pub fn check_time(time: f64) -> Result<f64, CliError> {
+    if time.is_finite() && (0.0..=MAX_SCENE_TIME_S).contains(&time) {
+        Ok(time)
     } else {
         Err(CliError::new(format!(
             "--time must lie in [0, 3600] s, got {time:?}"
@@ -115,32 +120,15 @@ pub fn has_png_extension(path: &Path) -> bool {
     extension_kind(path) == Some(ImageKind::Png)
 }
 
-/// Simulates the scene up to `time` seconds at its frame rate.
-pub fn advance_to(flag: &mut FlagScene, time: f32) -> Result<(), CliError> {
-    let dt = 1.0 / flag.scene.render.fps;
-    let steps = (f64::from(time) / f64::from(dt)).round();
-    if !(0.0..=f64::from(u32::MAX)).contains(&steps) {
-        return Err(CliError::new(format!(
-            "cannot simulate {time} s at {} frames/s: {steps} frames",
-            flag.scene.render.fps
-        )));
-    }
-    let steps = steps as u32;
-    let mut times = StageTimes::default();
-    for _ in 0..steps {
-        flag.advance(dt, &mut times)?;
-    }
-    Ok(())
-}
-
 pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
     let time = args.time.map(check_time).transpose()?;
     // An image type `save_image` cannot write is refused before the scene is simulated and drawn.
     if let Some(out) = &args.out {
         image_kind(out)?;
-        crate::check_output_file(out)?;
+        crate::output::check_output_file(out)?;
     }
     let scene = crate::load_scene(args.scene.as_deref())?;
+    crate::output::interrupt::install();
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
     let exposure = renderer.exposure();
@@ -157,25 +145,30 @@ pub fn run_render(args: &RenderArgs) -> Result<(), CliError> {
             if frames == 0 {
                 return Err(CliError::new("--frames must be ≥ 1"));
             }
-            crate::create_output_dir(dir)?;
-            advance_to(&mut flag, time.unwrap_or(0.0))?;
-            let dt = 1.0 / flag.scene.render.fps;
-            let progress = crate::progress_bar(u64::from(frames), "rendering");
-            for frame in 0..frames {
-                if frame > 0 {
-                    flag.advance(dt, &mut times)?;
+            let names = FrameNames::new(frames, &["png", "exr"]);
+            crate::output::prepare_sequence_folder(dir, &names, args.overwrite)?;
+            let (png, exr) = (
+                matches!(args.format, ImageFormat::Png | ImageFormat::Both),
+                matches!(args.format, ImageFormat::Exr | ImageFormat::Both),
+            );
+            let sequence = Sequence {
+                dir,
+                names: &names,
+                extension: if png { "png" } else { "exr" },
+                frames,
+                start: time.unwrap_or(0.0),
+                verb: "rendering",
+            };
+            run_sequence(&mut flag, &sequence, &mut times, |flag, frame, times| {
+                let image = renderer.render(flag, times)?;
+                if png {
+                    save_image(&image, &dir.join(names.name(frame, "png")), exposure)?;
                 }
-                let image = renderer.render(&flag, &mut times)?;
-                let stem = dir.join(format!("frame_{frame:04}"));
-                if matches!(args.format, ImageFormat::Png | ImageFormat::Both) {
-                    save_image(&image, &stem.with_extension("png"), exposure)?;
+                if exr {
+                    save_image(&image, &dir.join(names.name(frame, "exr")), exposure)?;
                 }
-                if matches!(args.format, ImageFormat::Exr | ImageFormat::Both) {
-                    save_image(&image, &stem.with_extension("exr"), exposure)?;
-                }
-                progress.inc(1);
-            }
-            progress.finish_and_clear();
+                Ok(())
+            })?;
             eprintln!(
                 "wrote {frames} frames to {} ({})",
                 dir.display(),
@@ -234,7 +227,7 @@ pub const FRONT_LIT_PHASE: f32 = 0.6;
 /// The four panels of figure 2, in reading order: (baseline, back-lit), (baseline, front-lit),
 /// (thin-slab, back-lit), (thin-slab, front-lit), as linear images of the scene's size. The thin-slab
 /// panels reproduce the paper: single scattering, Λ = 1, τ1 = 2, whatever the scene's shading says.
-pub fn figure2_panels(scene: &Scene, time: f32) -> Result<[LinearImage; 4], CliError> {
+pub fn figure2_panels(scene: &Scene, time: f64) -> Result<[LinearImage; 4], CliError> {
     let mut scene = scene.clone();
     scene.light.period = 0.0; // the light holds still at each panel's angle
     let mut flag = FlagScene::new(scene.clone())?;
@@ -352,9 +345,9 @@ pub fn run_figure2(args: &Figure2Args) -> Result<(), CliError> {
             args.out.display()
         )));
     }
-    crate::check_output_file(&args.out)?;
+    crate::output::check_output_file(&args.out)?;
     if let Some(dir) = &args.linear_dir {
-        crate::create_output_dir(dir)?;
+        crate::output::create_output_dir(dir)?;
     }
     let scene = crate::load_scene(args.scene.as_deref())?;
     let panels = figure2_panels(&scene, time)?;

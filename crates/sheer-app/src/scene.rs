@@ -140,12 +140,14 @@ impl Default for LightSection {
 }
 
 impl LightSection {
-    /// Light position at time `time` (s).
-    pub fn position(&self, time: f32) -> [f32; 3] {
+    /// Light position at scene time `time` (s). The angle is reduced to one turn in double precision
+    /// first, so that an hour into the scene the light is where the hour puts it.
+    pub fn position(&self, time: f64) -> [f32; 3] {
         let angle = if self.period == 0.0 {
             self.phase
         } else {
-            self.phase + std::f32::consts::TAU * time / self.period
+            let turns = (time / f64::from(self.period)).rem_euclid(1.0);
+            self.phase + (std::f64::consts::TAU * turns) as f32
         };
         [
             self.centre[0] + self.radius * angle.sin(),
@@ -845,6 +847,8 @@ mod tests {
         let default = Scene {
             base_dir: scene.base_dir.clone(),
             builtin_assets: false,
+            // The template leaves its image keys out, so that a copy works from any folder.
+            builtin_images: DEFAULT_IMAGE_KEYS.to_vec(),
             ..Scene::default()
         };
         assert_eq!(scene, default);
@@ -859,6 +863,36 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_copy_of_the_default_scene_works_from_any_folder() {
+        let folder = std::env::temp_dir().join(format!("sheer-template-{}", std::process::id()));
+        std::fs::create_dir_all(&folder).unwrap();
+        let copy = folder.join("my.scene.toml");
+        std::fs::copy(assets().join("default.scene.toml"), &copy).unwrap();
+        let scene = Scene::load(&copy).unwrap();
+        let flag = scene
+            .read_asset(
+                "shading.albedo_texture",
+                scene.shading.albedo_texture.as_deref().unwrap(),
+            )
+            .unwrap();
+        let painting = scene
+            .read_asset(
+                "background.image",
+                scene.background.image.as_deref().unwrap(),
+            )
+            .unwrap();
+        assert_eq!(
+            &*flag,
+            &include_bytes!("../../../assets/faroe_flag.png")[..]
+        );
+        assert_eq!(
+            &*painting,
+            &include_bytes!("../../../assets/faroe_landscape.png")[..]
+        );
+        std::fs::remove_dir_all(&folder).unwrap();
     }
 
     #[test]
@@ -1899,7 +1933,12 @@ mod key_tests {
     #[test]
     fn the_built_in_default_scene_is_the_shipped_file_with_its_images() {
         let scene = Scene::builtin_default().unwrap();
-        assert_eq!(scene, Scene::default());
+        // The file leaves its image keys out: the built-in images.
+        let default = Scene {
+            builtin_images: DEFAULT_IMAGE_KEYS.to_vec(),
+            ..Scene::default()
+        };
+        assert_eq!(scene, default);
         // The images it names are built in, identical to the files in assets/.
         for key_and_name in [
             ("shading.albedo_texture", &scene.shading.albedo_texture),

@@ -2,25 +2,35 @@
 //! (positions in metres, texture coordinates of the flag, triangles), for use in other tools.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use sheer_cloth::{ClothModel, Simulation};
 
 use crate::CliError;
+use crate::frame::{FlagScene, StageTimes};
+use crate::output::FrameNames;
 use crate::scene::Scene;
+use crate::sequence::{Sequence, run_sequence};
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
     /// Scene file (TOML); default: the shipped default scene.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Number of frames to simulate and write (1/fps seconds each).
+    /// Number of frames to write (1/fps seconds apart; frame 0 is the scene at --time).
     #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
     pub frames: u32,
-    /// Directory for frame_0000.obj, frame_0001.obj, … (created if missing).
+    /// Scene time of frame 0, s, in [0, 3600] (the flag is simulated up to it), as in `render`.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub time: f64,
+    /// Directory for frame_0000.obj, frame_0001.obj, … (created if missing; numbers padded to the last
+    /// frame's width). A folder that already holds frame_*.obj files is refused unless --overwrite.
     #[arg(long)]
     pub out_dir: PathBuf,
+    /// Remove the frame_*.obj files already in --out-dir first.
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 /// The flag of a scene, hoist edge pinned.
@@ -43,21 +53,21 @@ pub fn grid_uvs(columns: usize, rows: usize) -> Vec<[f32; 2]> {
         .collect()
 }
 
-/// One frame as OBJ text.
-pub fn obj_text(sim: &Simulation, uvs: &[[f32; 2]], frame: u32) -> String {
+/// One frame as OBJ text, positions in the shortest form that reads back to the simulation's f64
+/// exactly.
+pub fn obj_text(sim: &Simulation, uvs: &[[f32; 2]], frame: u32, time: f64) -> String {
     let mut text = String::with_capacity(64 * sim.particle_count());
     let _ = writeln!(
         text,
-        "# sheer frame {frame}, t = {:.6} s, {} particles",
-        sim.time(),
+        "# sheer frame {frame}, t = {time:?} s, {} particles",
         sim.particle_count()
     );
     for p in sim.positions() {
-        let _ = writeln!(text, "v {:.7} {:.7} {:.7}", p.x, p.y, p.z);
+        let _ = writeln!(text, "v {:?} {:?} {:?}", p.x, p.y, p.z);
     }
     for uv in uvs {
         // OBJ's v runs upward.
-        let _ = writeln!(text, "vt {:.7} {:.7}", uv[0], 1.0 - uv[1]);
+        let _ = writeln!(text, "vt {:?} {:?}", uv[0], 1.0 - uv[1]);
     }
     for tri in sim.triangles() {
         let [a, b, c] = tri.map(|i| i + 1);
@@ -66,12 +76,8 @@ pub fn obj_text(sim: &Simulation, uvs: &[[f32; 2]], frame: u32) -> String {
     text
 }
 
-fn write(path: &Path, text: &str) -> Result<(), CliError> {
-    std::fs::write(path, text)
-        .map_err(|e| CliError::new(format!("cannot write {}: {e}", path.display())))
-}
-
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
+    let start = crate::render_cmd::check_time(args.time)?;
     let scene = crate::load_scene(args.scene.as_deref())?;
     if scene.static_sheet.is_some() {
         return Err(CliError::new(
@@ -81,26 +87,37 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     if args.frames == 0 {
         return Err(CliError::new("--frames must be ≥ 1"));
     }
-    crate::create_output_dir(&args.out_dir)?;
-    let mut sim = flag_simulation(&scene)?;
-    let uvs = grid_uvs(scene.flag.columns, scene.flag.rows);
-    let dt = 1.0 / f64::from(scene.render.fps);
-    let progress = crate::progress_bar(u64::from(args.frames), "simulating");
-    for frame in 0..args.frames {
-        sim.step(dt).map_err(|e| {
-            CliError::new(format!("frame {frame}: {}", crate::frame::step_failure(&e)))
-        })?;
-        write(
-            &args.out_dir.join(format!("frame_{frame:04}.obj")),
-            &obj_text(&sim, &uvs, frame),
-        )?;
-        progress.inc(1);
-    }
-    progress.finish_and_clear();
+    let names = FrameNames::new(args.frames, &["obj"]);
+    crate::output::prepare_sequence_folder(&args.out_dir, &names, args.overwrite)?;
+    crate::output::interrupt::install();
+    let mut flag = FlagScene::new(scene)?;
+    let uvs = grid_uvs(flag.scene.flag.columns, flag.scene.flag.rows);
+    let sequence = Sequence {
+        dir: &args.out_dir,
+        names: &names,
+        extension: "obj",
+        frames: args.frames,
+        start,
+        verb: "simulating",
+    };
+    run_sequence(
+        &mut flag,
+        &sequence,
+        &mut StageTimes::default(),
+        |flag, frame, _| {
+            let sim = flag
+                .simulation()
+                .ok_or_else(|| CliError::new("internal: a flag scene without a simulation"))?;
+            crate::output::write_file(
+                &args.out_dir.join(names.name(frame, "obj")),
+                obj_text(sim, &uvs, frame, flag.time()).as_bytes(),
+            )
+        },
+    )?;
     eprintln!(
         "wrote {} frames of {} particles to {}",
         args.frames,
-        sim.particle_count(),
+        flag.mesh.positions.len(),
         args.out_dir.display()
     );
     Ok(())

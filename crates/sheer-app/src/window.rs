@@ -207,6 +207,8 @@ pub struct SheerApp {
     script_failure: Arc<Mutex<Option<String>>>,
     // Camera orbit about its target: azimuth and elevation (rad) and distance (m).
     orbit: (f32, f32, f32),
+    /// The space left for the image beside the panel in the last frame, points.
+    image_area: egui::Vec2,
 }
 
 fn orbit_of(scene: &Scene) -> (f32, f32, f32) {
@@ -221,7 +223,7 @@ impl SheerApp {
     pub fn new(scene: Scene, options: WindowOptions) -> Result<SheerApp, CliError> {
         let renderer = FrameRenderer::new(&scene)?;
         let mut flag = FlagScene::new(scene.clone())?;
-        crate::render_cmd::advance_to(&mut flag, scene.render.warmup)?;
+        crate::sequence::advance_to(&mut flag, f64::from(scene.render.warmup))?;
         let orbit = orbit_of(&scene);
         let wind = scene.simulation.wind;
         let speed = wind.velocity.length();
@@ -267,6 +269,7 @@ impl SheerApp {
             screenshot_done: Arc::new(Mutex::new(None)),
             script_failure: Arc::new(Mutex::new(None)),
             orbit,
+            image_area: egui::Vec2::ZERO,
         })
     }
 
@@ -306,11 +309,10 @@ impl SheerApp {
     }
 
     fn advance_and_render(&mut self, ctx: &egui::Context) {
-        let dt = 1.0 / self.flag.scene.render.fps;
         let mut times = StageTimes::default();
         if !self.paused || self.step_once {
             self.step_once = false;
-            if let Err(error) = self.flag.advance(dt, &mut times) {
+            if let Err(error) = self.flag.advance_frame(&mut times) {
                 // Never show a diverged mesh: back to rest, and say so.
                 self.report_error(ctx, format!("{error} — the flag was reset"));
                 if let Err(e) = self.flag.reset() {
@@ -406,6 +408,7 @@ impl SheerApp {
         egui::CollapsingHeader::new("Light")
             .default_open(true)
             .show(ui, |ui| {
+                let t = self.flag.time();
                 let l = &mut self.flag.scene.light;
                 if let Some(v) = self.fields.flux.show(ui, in_range(0.0, 1e4)) {
                     l.flux = v as f32;
@@ -415,19 +418,17 @@ impl SheerApp {
                     l.radius = v as f32;
                 }
                 if let Some(v) = self.fields.period.show(ui, in_range(-600.0, 600.0)) {
-                    // Keep the light where it is when the speed changes.
-                    let t = self.flag.time;
-                    let old = if l.period == 0.0 {
-                        0.0
-                    } else {
-                        std::f32::consts::TAU * t / l.period
+                    // Keep the light where it is when the speed changes (angles in whole turns
+                    // dropped, in double precision: the scene's clock may be far from 0).
+                    let angle = |period: f64| {
+                        if period == 0.0 {
+                            0.0
+                        } else {
+                            std::f64::consts::TAU * (t / period).rem_euclid(1.0)
+                        }
                     };
-                    let new = if v == 0.0 {
-                        0.0
-                    } else {
-                        std::f32::consts::TAU * t / v as f32
-                    };
-                    l.phase += old - new;
+                    l.phase = (f64::from(l.phase) + angle(f64::from(l.period)) - angle(v))
+                        .rem_euclid(std::f64::consts::TAU) as f32;
                     l.period = v as f32;
                 }
             });
@@ -652,26 +653,22 @@ impl eframe::App for SheerApp {
         }
         self.advance_and_render(&ctx);
         self.frames_run += 1;
-        if let Some(limit) = self.options.frames
-            && self.frames_run >= limit
-            && !self.screenshot_requested
-        {
-            match self.options.screenshot.clone() {
-                Some(path) if self.frames_run == limit => self.request_screenshot(&ctx, path),
-                Some(_) => {}
-                None => ctx.send_viewport_cmd(egui::ViewportCommand::Close),
-            }
-        }
         egui::Panel::left("controls")
             .resizable(false)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
             });
         egui::CentralPanel::default().show(ui, |ui| {
-            if let Some(texture) = &self.texture {
-                let available = ui.available_size();
+            let available = ui.available_size();
+            self.image_area = available;
+            if !image_fits(available) {
+                ui.colored_label(
+                    egui::Color32::from_rgb(255, 110, 110),
+                    too_small_message(available),
+                );
+            } else if let Some(texture) = &self.texture {
                 let size = texture.size_vec2();
-                let scale = (available.x / size.x).min(available.y / size.y).max(0.1);
+                let scale = (available.x / size.x).min(available.y / size.y);
                 let response = ui.add(
                     egui::Image::new(texture)
                         .fit_to_exact_size(size * scale)
@@ -692,8 +689,41 @@ impl eframe::App for SheerApp {
                 }
             }
         });
+        if let Some(limit) = self.options.frames
+            && self.frames_run >= limit
+            && !self.screenshot_requested
+        {
+            match self.options.screenshot.clone() {
+                // A screenshot without the flag in it is no screenshot of the scene.
+                Some(_) if self.frames_run == limit && !image_fits(self.image_area) => {
+                    let message = format!("--screenshot: {}", too_small_message(self.image_area));
+                    self.report_error(&ctx, message);
+                }
+                Some(path) if self.frames_run == limit => self.request_screenshot(&ctx, path),
+                Some(_) => {}
+                None => ctx.send_viewport_cmd(egui::ViewportCommand::Close),
+            }
+        }
         ctx.request_repaint();
     }
+}
+
+/// The smallest image area, in points each way, in which the window still shows the frame.
+const MIN_IMAGE_SIDE: f32 = 128.0;
+
+/// Whether an image area of `available` points shows the frame.
+fn image_fits(available: egui::Vec2) -> bool {
+    available.x >= MIN_IMAGE_SIDE && available.y >= MIN_IMAGE_SIDE
+}
+
+/// Says that the window is too small for the image, with the sizes.
+fn too_small_message(available: egui::Vec2) -> String {
+    format!(
+        "the window leaves {:.0}×{:.0} points beside the panel, too small to show the image (it needs \
+         {MIN_IMAGE_SIDE:.0}×{MIN_IMAGE_SIDE:.0}): make the window or the screen larger",
+        available.x.max(0.0),
+        available.y.max(0.0)
+    )
 }
 
 /// Opens the window; returns when it closes.

@@ -189,9 +189,11 @@ pub fn evaluate_csv_with(
                 problem,
             }
         })?;
+        // `{:?}`: the shortest digits that read back to the same f64, with an exponent outside
+        // [1e-5, 1e16) (`{}` writes 1e308 with 309 digits).
         writeln!(
             output,
-            "{},{},{},{},{},{},{}",
+            "{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
             row.optical_thickness, row.albedo, row.mu0, row.mu, row.alpha, row.l_plus, row.l_minus
         )?;
     }
@@ -216,6 +218,36 @@ mod tests {
         let mut out = Vec::new();
         evaluate_csv(input.as_bytes(), &mut out, convention)?;
         Ok(String::from_utf8(out).unwrap())
+    }
+
+    #[test]
+    fn numbers_are_written_in_their_shortest_round_trip_form() {
+        let out = run("1e308,1,1e-7,0.5\n", IrradianceConvention::NormalToBeam).unwrap();
+        let row = out.lines().nth(1).unwrap();
+        assert!(row.starts_with("1e308,1.0,1e-7,0.5,"), "{row}");
+        assert!(row.len() < 120, "{row}");
+        // Every field reads back to the value computed.
+        let with = run("2,1,0.3,0.7\n", IrradianceConvention::NormalToBeam).unwrap();
+        let fields: Vec<f64> = with
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .map(|f| f.parse().unwrap())
+            .collect();
+        let exact = evaluate_row("2,1,0.3,0.7", IrradianceConvention::NormalToBeam).unwrap();
+        assert_eq!(
+            fields,
+            [
+                exact.optical_thickness,
+                exact.albedo,
+                exact.mu0,
+                exact.mu,
+                exact.alpha,
+                exact.l_plus,
+                exact.l_minus
+            ]
+        );
     }
 
     #[test]

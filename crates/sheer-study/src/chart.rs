@@ -145,8 +145,13 @@ pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError>
     let panels = panels(rows);
     let columns = panels.len().clamp(1, 3);
     let panel_rows = panels.len().div_ceil(columns).max(1);
-    let root = BitMapBackend::new(path, (560 * columns as u32, 460 * panel_rows as u32 + 40))
-        .into_drawing_area();
+    // Drawn under a hidden name and renamed into place when complete.
+    let partial = crate::whole_file::partial_path(path);
+    let root = BitMapBackend::new(
+        &partial,
+        (560 * columns as u32, 460 * panel_rows as u32 + 40),
+    )
+    .into_drawing_area();
     root.fill(&WHITE).map_err(|e| chart_error(path, e))?;
     let (title, body) = root.split_vertically(40);
     title
@@ -240,7 +245,7 @@ pub fn work_precision_chart(rows: &[Row], path: &Path) -> Result<(), StudyError>
             .map_err(|e| chart_error(path, e))?;
     }
     root.present().map_err(|e| chart_error(path, e))?;
-    Ok(())
+    crate::whole_file::rename_into_place(&partial, path)
 }
 
 /// Geometric cell edges around sorted log-spaced values.
@@ -282,8 +287,13 @@ pub fn stability_chart(map: &StabilityMap, path: &Path) -> Result<(), StudyError
         .collect();
     let columns = 4usize;
     let panel_rows = names.len().div_ceil(columns).max(1);
-    let root = BitMapBackend::new(path, (420 * columns as u32, 380 * panel_rows as u32 + 70))
-        .into_drawing_area();
+    // Drawn under a hidden name and renamed into place when complete.
+    let partial = crate::whole_file::partial_path(path);
+    let root = BitMapBackend::new(
+        &partial,
+        (420 * columns as u32, 380 * panel_rows as u32 + 70),
+    )
+    .into_drawing_area();
     root.fill(&WHITE).map_err(|e| chart_error(path, e))?;
     let (title, body) = root.split_vertically(70);
     title
@@ -350,5 +360,5 @@ pub fn stability_chart(map: &StabilityMap, path: &Path) -> Result<(), StudyError
         }
     }
     root.present().map_err(|e| chart_error(path, e))?;
-    Ok(())
+    crate::whole_file::rename_into_place(&partial, path)
 }

@@ -339,7 +339,7 @@ fn write_file(path: &Path, text: &str) -> Result<(), StudyError> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).map_err(|e| io_error(parent, e))?;
     }
-    std::fs::write(path, text).map_err(|e| io_error(path, e))
+    crate::whole_file::write(path, text)
 }
 
 fn optional(value: Option<f64>) -> String {

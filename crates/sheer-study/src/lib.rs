@@ -36,6 +36,7 @@ pub mod scene;
 pub mod seeds;
 pub mod silhouette;
 pub mod stability;
+mod whole_file;
 pub mod work_precision;
 
 pub use ablation::{AblationRow, CostRatio, CostTiming, ablation};

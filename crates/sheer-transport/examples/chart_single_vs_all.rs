@@ -140,7 +140,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let csv_path = format!("{docs}/single-vs-all-orders.csv");
-    std::fs::write(&csv_path, csv)?;
+    // Each file is written under a hidden name and renamed into place when complete.
+    let partial_csv = format!("{docs}/.single-vs-all-orders.part.csv");
+    std::fs::write(&partial_csv, csv)?;
+    std::fs::rename(&partial_csv, &csv_path)?;
 
     println!("side        albedo  mu0  mu   err@0.01   err@0.2    err@2      tau1 where err = 1%");
     for curve in &curves {
@@ -184,7 +187,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map_err(|_| format!("{font_path} is not a usable TrueType font"))?;
 
     let png_path = format!("{docs}/single-vs-all-orders.png");
-    let root = BitMapBackend::new(&png_path, (1600, 760)).into_drawing_area();
+    let partial_png = format!("{docs}/.single-vs-all-orders.part.png");
+    let root = BitMapBackend::new(&partial_png, (1600, 760)).into_drawing_area();
     root.fill(&WHITE)?;
     let (title, body) = root.split_vertically(50);
     title.draw(&Text::new(
@@ -261,6 +265,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .draw()?;
     }
     root.present()?;
+    std::fs::rename(&partial_png, &png_path)?;
     println!("wrote {csv_path} and {png_path}");
     Ok(())
 }

@@ -23,8 +23,11 @@
 //!   stored.
 //!
 //! # File format (`assets/all_orders_table.bin` at the workspace root, little-endian)
-//! `b"SHEERAOT"`, `u32` version (1), `u32` counts `n_tau, n_albedo, n_cosine`, `f64` τ1 range
-//! (min, max), then `f32` values `[side][tau][albedo][mu0][mu]` with side 0 = reflected, 1 = transmitted.
+//! `b"SHEERAOT"`, `u32` version (2), `u32` counts `n_tau, n_albedo, n_cosine`, `f64` τ1 range
+//! (min, max), `u64` checksum, then `f32` values `[side][tau][albedo][mu0][mu]` with side 0 =
+//! reflected, 1 = transmitted. The checksum is FNV-1a (64-bit) over every byte of the file but its own
+//! eight: any one changed byte changes it (each step `h ← (h ⊕ b)·p` is a bijection of `h` for a
+//! fixed byte and of `b` for a fixed `h`), so a damaged file is refused on load.
 
 use std::path::Path;
 
@@ -35,7 +38,7 @@ use crate::slab::SlabSolver;
 use crate::{Result, TransportError, validate};
 
 const MAGIC: &[u8; 8] = b"SHEERAOT";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 /// Albedo used for the Λ = 0 node, where `L_m / Λ²` is a limit.
 const ALBEDO_FLOOR: f64 = 1.0e-8;
 /// Largest node count accepted on any axis: far above any useful grid, and small enough that the
@@ -232,7 +235,25 @@ fn read_f64(bytes: &[u8], offset: usize) -> Result<f64> {
     Ok(f64::from_le_bytes(array))
 }
 
-const HEADER_BYTES: usize = 8 + 4 * 4 + 2 * 8;
+/// Magic, version, three counts, the τ1 range, then the checksum at [`CHECKSUM_OFFSET`].
+const HEADER_BYTES: usize = 8 + 4 * 4 + 2 * 8 + 8;
+/// Where the `u64` checksum sits in the header.
+const CHECKSUM_OFFSET: usize = HEADER_BYTES - 8;
+
+/// FNV-1a, 64-bit (Fowler, Noll & Vo): the file's checksum, over `parts` in order.
+fn fnv1a_64<'a>(parts: impl IntoIterator<Item = &'a [u8]>) -> u64 {
+    const OFFSET_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+    parts
+        .into_iter()
+        .flatten()
+        .fold(OFFSET_BASIS, |h, &b| (h ^ u64::from(b)).wrapping_mul(PRIME))
+}
+
+/// The checksum of a whole file, its checksum field skipped.
+fn file_checksum(bytes: &[u8]) -> u64 {
+    fnv1a_64([&bytes[..CHECKSUM_OFFSET], &bytes[HEADER_BYTES..]])
+}
 
 /// The largest stored `ln f` that [`AllOrdersTable::from_bytes`] accepts: far above any slab's (the
 /// solver's values span ln f ∈ [−15.6, −1.2] on the shipped table, and a thick slab's converge to the
@@ -368,9 +389,12 @@ impl AllOrdersTable {
         }
         bytes.extend_from_slice(&self.spec.tau_min.to_le_bytes());
         bytes.extend_from_slice(&self.spec.tau_max.to_le_bytes());
+        bytes.extend_from_slice(&[0; 8]); // the checksum, filled in below
         for value in &self.values {
             bytes.extend_from_slice(&value.to_le_bytes());
         }
+        let checksum = file_checksum(&bytes);
+        bytes[CHECKSUM_OFFSET..HEADER_BYTES].copy_from_slice(&checksum.to_le_bytes());
         bytes
     }
 
@@ -383,7 +407,8 @@ impl AllOrdersTable {
         let version = read_u32(bytes, 8)?;
         if version != VERSION {
             return Err(TransportError::TableFormat(format!(
-                "unsupported version {version}"
+                "unsupported version {version} (this build reads version {VERSION}; regenerate the \
+                 table with `cargo run -p sheer-transport --release --example make_table`)"
             )));
         }
         let spec = TableSpec {
@@ -426,12 +451,30 @@ impl AllOrdersTable {
                 "value ln f = {v:e} above {LOG_VALUE_MAX}, which no slab reaches"
             )));
         }
+        // Last, so that the checks above name what they find; this one catches any other change.
+        let stored = u64::from_le_bytes(
+            bytes[CHECKSUM_OFFSET..HEADER_BYTES]
+                .try_into()
+                .map_err(|_| TransportError::TableFormat("truncated header".into()))?,
+        );
+        let computed = file_checksum(bytes);
+        if stored != computed {
+            return Err(TransportError::TableFormat(format!(
+                "checksum mismatch (stored {stored:016x}, computed {computed:016x}): the file is damaged"
+            )));
+        }
         Ok(Self::from_parts(spec, values))
     }
 
     /// Writes the table file.
+    /// Written beside it under a temporary name and renamed into place, so that an interrupted write
+    /// never leaves a partial table under the table's name.
     pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
-        Ok(std::fs::write(path, self.to_bytes())?)
+        let path = path.as_ref();
+        let mut partial = path.as_os_str().to_owned();
+        partial.push(format!(".part-{}", std::process::id()));
+        std::fs::write(&partial, self.to_bytes())?;
+        Ok(std::fs::rename(&partial, path)?)
     }
 
     /// Reads a table file.

@@ -43,16 +43,48 @@ fn malformed_files_are_rejected() {
     ));
 }
 
-/// A header with the given counts and τ1 range and no values.
+/// A header with the given counts and τ1 range, a zero checksum and no values.
 fn header_only(counts: [u32; 3], tau_range: (f64, f64)) -> Vec<u8> {
     let mut bytes = b"SHEERAOT".to_vec();
-    bytes.extend_from_slice(&1u32.to_le_bytes());
+    bytes.extend_from_slice(&2u32.to_le_bytes());
     for count in counts {
         bytes.extend_from_slice(&count.to_le_bytes());
     }
     bytes.extend_from_slice(&tau_range.0.to_le_bytes());
     bytes.extend_from_slice(&tau_range.1.to_le_bytes());
+    bytes.extend_from_slice(&0u64.to_le_bytes());
     bytes
+}
+
+/// Any one byte changed anywhere in the file, to a value that is still a finite, plausible `ln f`,
+/// fails the checksum: a damaged table is refused on load, not sampled.
+#[test]
+fn a_changed_byte_fails_the_checksum() {
+    let bytes = shipped().to_bytes();
+    // Offsets in the values (the low byte of an f32 mantissa: still finite) and in the header's τ1 range.
+    for offset in [48, 48 + 4 * 1000, bytes.len() - 4, 30] {
+        let mut damaged = bytes.clone();
+        damaged[offset] ^= 0x01;
+        let error = AllOrdersTable::from_bytes(&damaged)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("checksum"), "byte {offset}: {error}");
+    }
+    // The checksum field itself.
+    let mut damaged = bytes.clone();
+    damaged[40] ^= 0x80;
+    let error = AllOrdersTable::from_bytes(&damaged)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("checksum"), "{error}");
+    // A table written by an older build (version 1, no checksum) is refused with the remedy.
+    let mut old = bytes.clone();
+    old[8..12].copy_from_slice(&1u32.to_le_bytes());
+    let error = AllOrdersTable::from_bytes(&old).unwrap_err().to_string();
+    assert!(
+        error.contains("version 1") && error.contains("make_table"),
+        "{error}"
+    );
 }
 
 #[test]

@@ -39,7 +39,7 @@ pub use cpu::{
 pub use scene::{
     AllOrdersSampling, Background, Camera, CameraError, LinearImage, MeshError, ShadingError,
     ShadingParams, SlabMesh, Texture2d, linear_to_srgb, linear_to_srgb8, save_image_file,
-    srgb8_to_linear,
+    srgb8_to_linear, write_file_atomically,
 };
 
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};

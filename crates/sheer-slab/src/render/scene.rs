@@ -701,7 +701,36 @@ where
 {
     let mut bytes = std::io::Cursor::new(Vec::new());
     image.write_to(&mut bytes, format)?;
-    std::fs::write(path, bytes.into_inner()).map_err(image::ImageError::IoError)
+    write_file_atomically(path, &bytes.into_inner()).map_err(image::ImageError::IoError)
+}
+
+/// Writes `bytes` to `path` so that `path` never holds a partial file: they go to a hidden name beside
+/// it (`.NAME.part-PID`) and are renamed into place when complete (a rename within one folder is
+/// atomic on POSIX file systems). An interrupted or failed write leaves the old file, or none; the
+/// partial file is removed on error (a killed process can leave one, hidden). Through a symbolic link
+/// the file it names is replaced, not the link; a device or pipe (`/dev/stdout`, `/dev/full`) is
+/// written directly, since no partial file can be left there.
+pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        return std::fs::write(path, bytes);
+    }
+    let target = if path.is_symlink() {
+        std::fs::canonicalize(path)?
+    } else {
+        path.to_path_buf()
+    };
+    let name = target.file_name().ok_or_else(|| {
+        std::io::Error::new(std::io::ErrorKind::InvalidInput, "the path names no file")
+    })?;
+    let mut partial_name = std::ffi::OsString::from(".");
+    partial_name.push(name);
+    partial_name.push(format!(".part-{}", std::process::id()));
+    let partial = target.with_file_name(partial_name);
+    let result = std::fs::write(&partial, bytes).and_then(|()| std::fs::rename(&partial, &target));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    result
 }
 
 /// The inverse sRGB transfer function (IEC 61966-2-1): an 8-bit sRGB value to linear [0, 1], e.g. for
