@@ -30,6 +30,9 @@ struct Frame {
     background: vec4<f32>,
     // x: the baseline's constant transmittance α (0.2 in the paper's figure 2).
     baseline: vec4<f32>,
+    // Sky light (crates/sheer-slab/src/sky.rs): rgb of the nine spherical-harmonic coefficients of E/π, the
+    // environment's irradiance over π (W/(m²·sr)), in the order of `spherical_harmonics`.
+    sky: array<vec4<f32>, 9>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -52,6 +55,9 @@ struct AllOrdersAxes {
 }
 
 @group(0) @binding(7) var<uniform> all_orders_axes: AllOrdersAxes;
+// The diffuse (sky light) table, on the all-orders table's axes: texel (a·C + j, t) holds
+// (ln(R_d/Λ) at μ nodes j, j+1, ln(T_d/Λ) at μ nodes j, j+1) of τ1 node t, albedo node a.
+@group(0) @binding(8) var diffuse_table: texture_2d<f32>;
 
 const PI: f32 = 3.14159265358979;
 // Cosines below this are treated as this (grazing guard): WGSL may assume no infinities at run time, so
@@ -64,6 +70,8 @@ override per_channel_thickness: bool = false;
 override has_thickness_texture: bool = false;
 // Set per pipeline: true for the all-orders model (single scattering + the table's multiple part).
 override all_orders: bool = false;
+// Set per pipeline: true when sky light lights both faces (the diffuse table and `frame.sky`).
+override sky_light: bool = false;
 
 // φ(d) = (1 − e^{−d})/d = Σ (−d)^k/(k+1)! for 0 ≤ d ≤ 1/2, by Horner with the coefficients
 // (−1)^k/(k+1)! (multiplications only: divisions by constants stay divisions without fast-math); stopping
@@ -269,6 +277,62 @@ fn all_orders_reduced_both_faces(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu
         exp(all_orders_log_face(nodes, albedos, cosines, all_orders_face_rows(false))));
 }
 
+// ---- sky light (crates/sheer-slab/src/sky.rs): the slab's all-orders response to diffuse light -------
+
+// (ln(R_d/Λ), ln(T_d/Λ)) at cosine μ, trilinear on the all-orders table's axes: τ1 nodes, each with its own
+// albedo position, and the μ cell whose two nodes each texel holds.
+fn diffuse_log_values(tau: AllOrdersTau, albedo: AllOrdersAlbedo, mu: f32) -> vec2<f32> {
+    let cells = all_orders_axes.cosine.x;
+    let j = all_orders_axis(sqrt(min(mu, 1.0)), cells);
+    let w = vec2<f32>(1.0 - j.y, j.y);
+    let step = i32(cells);
+    let row = i32(tau.node.x);
+    let lower = i32(albedo.lower.x) * step + i32(j.x);
+    let upper = i32(albedo.upper.x) * step + i32(j.x);
+    let a = textureLoad(diffuse_table, vec2<i32>(lower, row), 0);
+    let b = textureLoad(diffuse_table, vec2<i32>(lower + step, row), 0);
+    let c = textureLoad(diffuse_table, vec2<i32>(upper, row + 1), 0);
+    let d = textureLoad(diffuse_table, vec2<i32>(upper + step, row + 1), 0);
+    let at_lower = mix(vec2<f32>(dot(a.xy, w), dot(a.zw, w)), vec2<f32>(dot(b.xy, w), dot(b.zw, w)),
+        albedo.lower.y);
+    let at_upper = mix(vec2<f32>(dot(c.xy, w), dot(c.zw, w)), vec2<f32>(dot(d.xy, w), dot(d.zw, w)),
+        albedo.upper.y);
+    return mix(at_lower, at_upper, tau.node.y);
+}
+
+// L_in(m) = E(m)/π: the uniform radiance that lights a face of outward unit normal m (W/(m²·sr)), from the
+// nine coefficients; never negative.
+fn sky_radiance_on_face(m: vec3<f32>) -> vec3<f32> {
+    let basis_1 = 0.488602512 * m;
+    var sum = frame.sky[0].rgb * 0.282094792 + frame.sky[1].rgb * basis_1.y + frame.sky[2].rgb * basis_1.z
+        + frame.sky[3].rgb * basis_1.x;
+    sum += frame.sky[4].rgb * (1.09254843 * m.x * m.y) + frame.sky[5].rgb * (1.09254843 * m.y * m.z)
+        + frame.sky[6].rgb * (0.315391565 * (3.0 * m.z * m.z - 1.0))
+        + frame.sky[7].rgb * (1.09254843 * m.x * m.z)
+        + frame.sky[8].rgb * (0.546274215 * (m.x * m.x - m.y * m.y));
+    return max(sum, vec3<f32>(0.0));
+}
+
+// The sky's radiance toward the eye per unit albedo: L_in(m)·R_d/Λ + L_in(−m)·T_d/Λ per channel, m the
+// normal of the face the eye sees, μ = |n·e| floored as the point light's is. A zero normal gets none.
+fn sky_radiance_per_albedo(normal: vec3<f32>, to_eye: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>)
+        -> vec3<f32> {
+    let length_squared = dot(normal, normal);
+    let n = normal * inverseSqrt(select(1.0, length_squared, length_squared > 0.0));
+    let s = dot(n, normalize(to_eye));
+    let face = select(-n, n, s >= 0.0);
+    let mu = clamp(abs(s), COSINE_FLOOR, 1.0);
+    let nodes = all_orders_channels(tau);
+    let albedos = all_orders_channel_albedos(nodes, albedo);
+    let red = diffuse_log_values(nodes.red, albedos.red, mu);
+    let green = diffuse_log_values(nodes.green, albedos.green, mu);
+    let blue = diffuse_log_values(nodes.blue, albedos.blue, mu);
+    let reflected = exp(vec3<f32>(red.x, green.x, blue.x));
+    let transmitted = exp(vec3<f32>(red.y, green.y, blue.y));
+    let sky = sky_radiance_on_face(face) * reflected + sky_radiance_on_face(-face) * transmitted;
+    return select(vec3<f32>(0.0), sky, length_squared > 0.0);
+}
+
 struct SlabValues {
     // L/Λ (W/(m²·sr)): the single-scattered radiance for Λ = 1, plus with `all_orders` the multiple part
     // per unit albedo for the given Λ.
@@ -335,6 +399,9 @@ fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: v
         values.radiance_per_albedo += all_orders_multiple_per_albedo(tau, albedo, point.mu0, point.mu,
             point.eye_on_lit_side) * point.irradiance;
     }
+    if sky_light {
+        values.radiance_per_albedo += sky_radiance_per_albedo(normal, frame.eye.xyz - position, tau, albedo);
+    }
     return values;
 }
 
@@ -358,9 +425,9 @@ fn albedo_at(uv: vec2<f32>) -> vec3<f32> {
     return frame.albedo_scale.rgb * textureSample(albedo_texture, linear_sampler, uv).rgb;
 }
 
-// Λ at a vertex, needed there only by the all-orders model (its multiple part is not linear in Λ).
+// Λ at a vertex, needed there only by the all-orders model and the sky (not linear in Λ).
 fn albedo_at_vertex(uv: vec2<f32>) -> vec3<f32> {
-    if all_orders {
+    if all_orders || sky_light {
         return frame.albedo_scale.rgb * textureSampleLevel(albedo_texture, linear_sampler, uv, 0.0).rgb;
     }
     return vec3<f32>(1.0);
@@ -436,6 +503,10 @@ fn fs_multiple_at_vertex(input: MultipleAtVertexVarying) -> SlabOutput {
     // L_m/Λ = Λ·μ0·f with the fragment's own Λ and μ0: only f, which varies more slowly, is interpolated.
     let reduced = select(input.multiple_far, input.multiple_lit, point.eye_on_lit_side);
     values.radiance_per_albedo += albedo * (point.mu0 * point.irradiance) * reduced;
+    if sky_light {
+        values.radiance_per_albedo += sky_radiance_per_albedo(input.normal,
+            frame.eye.xyz - input.world_position, tau, albedo);
+    }
     return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
 }
 

@@ -8,6 +8,7 @@ mod bench_memory;
 mod bench_render;
 mod bench_sim;
 mod frame;
+mod orbit_cmd;
 mod output;
 mod render_cmd;
 mod scene;
@@ -139,6 +140,9 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// The paper's figure 2: baseline and thin-slab, back-lit and front-lit, as one 2×2 image.
     Figure2(render_cmd::Figure2Args),
+    /// The flag over one orbit of the light: the paper's model against the scene's shading, the
+    /// share of near-black cloth pixels per frame, and a strip of frames (--out).
+    Orbit(orbit_cmd::OrbitArgs),
     /// Simulate a scene's flag and write every frame's mesh as OBJ.
     Simulate(simulate::SimulateArgs),
     /// Evaluate the thin-slab model for CSV rows `tau1,albedo,mu0,mu`.
@@ -206,6 +210,7 @@ fn main() -> ExitCode {
             assets::write_assets(&args.out).map_err(|e| CliError::new(e.to_string()))
         }),
         Some(Command::Simulate(args)) => simulate::run(args),
+        Some(Command::Orbit(args)) => orbit_cmd::run(args),
         Some(Command::Study(args)) => {
             sheer_study::run(args).map_err(|e| CliError::new(e.to_string()))
         }

@@ -226,10 +226,12 @@ pub const FRONT_LIT_PHASE: f32 = 0.6;
 
 /// The four panels of figure 2, in reading order: (baseline, back-lit), (baseline, front-lit),
 /// (thin-slab, back-lit), (thin-slab, front-lit), as linear images of the scene's size. The thin-slab
-/// panels reproduce the paper: single scattering, Λ = 1, τ1 = 2, whatever the scene's shading says.
+/// panels reproduce the paper: single scattering, Λ = 1, τ1 = 2, and no sky light, whatever the scene's
+/// shading and environment say.
 pub fn figure2_panels(scene: &Scene, time: f64) -> Result<[LinearImage; 4], CliError> {
     let mut scene = scene.clone();
     scene.light.period = 0.0; // the light holds still at each panel's angle
+    scene.environment.sky_light = false; // the paper's scene: the point light alone
     let mut flag = FlagScene::new(scene.clone())?;
     advance_to(&mut flag, time)?;
     let mut panels = Vec::with_capacity(4);

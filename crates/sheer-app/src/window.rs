@@ -139,7 +139,102 @@ fn with_knob(method: Method, knob: MethodKnob) -> Method {
     }
 }
 
+/// Three radiances (W/(m²·sr)), typed as `r, g, b`: applied only when all three parse and lie in
+/// [0, 1e6]; otherwise refused with a message.
+struct RadianceField {
+    label: &'static str,
+    text: String,
+    error: Option<String>,
+}
+
+impl RadianceField {
+    fn new(label: &'static str, value: [f32; 3]) -> Self {
+        RadianceField {
+            label,
+            text: format!("{}, {}, {}", value[0], value[1], value[2]),
+            error: None,
+        }
+    }
+
+    /// Shows the field; returns the new radiances when they were entered and accepted.
+    fn show(&mut self, ui: &mut egui::Ui) -> Option<[f32; 3]> {
+        let mut accepted = None;
+        ui.horizontal(|ui| {
+            ui.label(self.label);
+            let response = ui.add(egui::TextEdit::singleline(&mut self.text).desired_width(110.0));
+            if response.lost_focus() {
+                let values: Vec<Option<f32>> = self
+                    .text
+                    .split(',')
+                    .map(|v| v.trim().parse::<f32>().ok())
+                    .collect();
+                match values.as_slice() {
+                    [Some(r), Some(g), Some(b)]
+                        if [r, g, b]
+                            .iter()
+                            .all(|v| v.is_finite() && (0.0..=1e6).contains(*v)) =>
+                    {
+                        self.error = None;
+                        accepted = Some([*r, *g, *b]);
+                    }
+                    _ => {
+                        self.error = Some(format!(
+                            "refused: `{}` is not three radiances r, g, b in [0, 1e6]",
+                            self.text.trim()
+                        ))
+                    }
+                }
+            }
+        });
+        if let Some(error) = &self.error {
+            ui.colored_label(egui::Color32::from_rgb(255, 110, 110), error);
+        }
+        accepted
+    }
+}
+
+/// What the chosen scattering model costs in accuracy at the panel's τ1 and Λ: the table's own
+/// interpolation error (sheer-transport's README) for all orders, and single scattering's missing share
+/// of the lit and the far face's diffuse radiance against the all-orders table at μ0 = μ = 0.7.
+fn model_error_text(shading: &ShadingSection) -> String {
+    let (tau, albedo) = (
+        f64::from(shading.optical_thickness[0]),
+        f64::from(shading.albedo_scale[0]),
+    );
+    let missing = || -> Option<(f64, f64)> {
+        let table = crate::frame::builtin_all_orders_table().ok()?;
+        let (t, a, c) = (
+            sheer_slab::OpticalThickness::new(tau).ok()?,
+            sheer_slab::Albedo::new(albedo).ok()?,
+            sheer_slab::Cosine::new("mu", 0.7).ok()?,
+        );
+        let single_lit = sheer_slab::single_scattered_reflected_radiance(t, a, c, c);
+        let single_far = sheer_slab::single_scattered_transmitted_radiance(t, a, c, c);
+        let all_lit = table.reflected_radiance(tau, albedo, 0.7, 0.7).ok()?;
+        let all_far = table.transmitted_radiance(tau, albedo, 0.7, 0.7).ok()?;
+        (all_lit > 0.0 && all_far > 0.0)
+            .then(|| (1.0 - single_lit / all_lit, 1.0 - single_far / all_far))
+    };
+    let single = match missing() {
+        Some((lit, far)) => format!(
+            "single scattering misses {:.0} % (lit side) and {:.0} % (far side) of the light here",
+            100.0 * lit,
+            100.0 * far
+        ),
+        None => "single scattering: τ1 outside the all-orders table, error not measured".into(),
+    };
+    match shading.scattering {
+        // The table's interpolation error against the solver (sheer-transport's README).
+        Scattering::AllOrders => format!(
+            "all orders: within 0.5 % (lit side) and 3.2 % (far side) of the exact slab; {single}"
+        ),
+        Scattering::Single => single,
+    }
+}
+
 struct Fields {
+    sky_radiance: RadianceField,
+    ground_radiance: RadianceField,
     optical_thickness: NumberField,
     albedo_scale: NumberField,
     flux: NumberField,
@@ -228,6 +323,11 @@ impl SheerApp {
         let wind = scene.simulation.wind;
         let speed = wind.velocity.length();
         let mut fields = Fields {
+            sky_radiance: RadianceField::new("sky (W/m²sr)", scene.environment.sky_radiance),
+            ground_radiance: RadianceField::new(
+                "ground (W/m²sr)",
+                scene.environment.ground_radiance,
+            ),
             optical_thickness: NumberField::new(
                 "τ₁",
                 f64::from(scene.shading.optical_thickness[0]),
@@ -400,6 +500,7 @@ impl SheerApp {
                     s.optical_thickness = [v as f32; 3];
                     shading_changed = true;
                 }
+                ui.small(model_error_text(s));
                 if let Some(v) = self.fields.albedo_scale.show(ui, in_range(0.0, 1.0)) {
                     s.albedo_scale = [v as f32; 3];
                     shading_changed = true;
@@ -432,6 +533,29 @@ impl SheerApp {
                     l.period = v as f32;
                 }
             });
+        let environment_before = self.flag.scene.environment.clone();
+        egui::CollapsingHeader::new("Sky")
+            .default_open(true)
+            .show(ui, |ui| {
+                let e = &mut self.flag.scene.environment;
+                ui.checkbox(&mut e.sky_light, "sky light on both faces")
+                    .on_hover_text("daylight from the sky above and the ground below (all orders)");
+                if let Some(v) = self.fields.sky_radiance.show(ui) {
+                    e.sky_radiance = v;
+                }
+                if let Some(v) = self.fields.ground_radiance.show(ui) {
+                    e.ground_radiance = v;
+                }
+                if e.image.as_deref().is_some_and(|i| !i.is_empty()) {
+                    ui.small("an environment image replaces these (environment.image)");
+                }
+            });
+        if self.flag.scene.environment != environment_before
+            && let Err(e) = self.renderer.update_shading(&self.flag.scene)
+        {
+            self.flag.scene.environment = environment_before;
+            self.notice = Some(e.to_string());
+        }
         ui.collapsing("Wind", |ui| {
             let mut params = self.flag.scene.simulation.clone();
             let mut changed = false;

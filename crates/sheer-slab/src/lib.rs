@@ -12,6 +12,7 @@ pub mod csv;
 pub mod model;
 pub mod reference;
 pub mod render;
+pub mod sky;
 
 pub use all_orders::{
     AllOrdersTable, Scattering, TableLoadError, default_table_path, load_all_orders_table,
@@ -23,3 +24,4 @@ pub use model::{
     point_light_surface_irradiance, single_scattered_reflected_radiance,
     single_scattered_transmitted_radiance, slab_shading,
 };
+pub use sky::{DiffuseEnvironment, DiffuseTable, SkyError, SkyLight, load_diffuse_table};

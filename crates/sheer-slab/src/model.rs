@@ -99,6 +99,17 @@ pub enum SlabParameterError {
         /// μ.
         mu: f64,
     },
+    /// The diffuse (sky light) table's sampler refused a query (not expected for validated inputs;
+    /// reported rather than panicking).
+    #[error("the diffuse table refused tau1 = {tau1:?}, Lambda = {albedo:?}, mu = {mu:?}")]
+    DiffuseTableQuery {
+        /// τ1.
+        tau1: f64,
+        /// Λ.
+        albedo: f64,
+        /// μ.
+        mu: f64,
+    },
 }
 
 /// Optical thickness τ1 of the slab (dimensionless), validated finite and > 0.

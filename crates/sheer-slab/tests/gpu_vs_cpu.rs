@@ -1476,3 +1476,253 @@ fn overflowing_radiance_and_a_viewless_camera_are_typed_errors() {
         ));
     }
 }
+
+/// Sky light (sheer_slab::sky) from the shipped diffuse table: a blue sky and a green ground.
+fn daylight() -> sheer_slab::SkyLight {
+    sheer_slab::SkyLight {
+        environment: sheer_slab::DiffuseEnvironment::sky_and_ground(
+            [0.43, 0.54, 0.59],
+            [0.2, 0.26, 0.31],
+        )
+        .unwrap(),
+        table: sheer_slab::load_diffuse_table(sheer_slab::DiffuseTable::DEFAULT_PATH)
+            .expect("the shipped diffuse table"),
+    }
+}
+
+/// A sheet under sky light alone (no point light), and under sky light plus the point light, with
+/// either scattering model: the per-fragment path against the CPU model (`slab_values_at`, f64)
+/// pixel by pixel with the tolerances of the point-light tests, the diffuse lookup's f32 error
+/// (the all-orders lookup's bound: the same axes and operations, one interpolation stage fewer) on the
+/// sky's part; then the per-vertex and CPU paths against per-fragment on a fine sheet with the
+/// interpolation bound of `per_vertex_and_cpu_paths_agree_with_per_fragment_on_a_fine_sheet`.
+#[test]
+fn sky_light_matches_the_cpu_model_on_every_path() {
+    let (width, height) = (128, 96);
+    let Some(mut renderer) = renderer(width, height) else {
+        return;
+    };
+    let epsilon = format_epsilon(&renderer);
+    let background = [0.21, 0.34, 0.55];
+    // Tilted, so that the sky and the ground light the two faces differently.
+    let sheet = Sheet {
+        origin: DVec3::new(-0.6, -0.45, 0.1),
+        u: DVec3::new(1.2, 0.0, 0.1),
+        v: DVec3::new(0.0, 0.9, -0.35),
+        normal: DVec3::new(1.2, 0.0, 0.1)
+            .cross(DVec3::new(0.0, 0.9, -0.35))
+            .normalize(),
+    };
+    let eyes = [Vec3::new(0.3, 0.2, 1.8), Vec3::new(-0.5, -0.6, -1.6)];
+    let mut largest_sky_share = 0.0f64;
+    for (case, (flux, scattering, tau, albedo)) in [
+        (0.0, Scattering::Single, 2.0, 1.0),
+        (40.0, all_orders(), 2.0, 0.9),
+        (40.0, Scattering::Single, 0.3, 0.7),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        for (view, eye) in eyes.iter().enumerate() {
+            let camera = Camera {
+                vertical_fov: 0.9,
+                ..camera(*eye)
+            };
+            let light = Vec3::new(0.5, 0.7, 1.4);
+            let mut shading = ShadingParams::uniform(tau, albedo, light, flux).unwrap();
+            shading.scattering = scattering.clone();
+            shading.sky = Some(daylight());
+            let no_sky = ShadingParams {
+                sky: None,
+                ..shading.clone()
+            };
+            let mesh = sheet.mesh(1);
+            let image = renderer
+                .render(
+                    &mesh,
+                    &camera,
+                    &shading,
+                    &Background::Uniform(background),
+                    EvaluationPath::PerFragment,
+                )
+                .unwrap();
+            let eye = eye.as_dvec3();
+            let hit = |x: f64, y: f64| {
+                let (origin, direction) = camera.pixel_ray(x, y, width, height).unwrap();
+                sheet.hit(origin, direction)
+            };
+            let albedo = f64::from(albedo);
+            let result = compare_with_slack(
+                &image,
+                epsilon,
+                |x, y| match hit(x, y) {
+                    Some(point) => {
+                        let tau = [f64::from(tau); 3];
+                        let (with, alpha) =
+                            slab_values_at(point, sheet.normal, tau, [albedo; 3], eye, &shading)
+                                .unwrap();
+                        let (without, _) =
+                            slab_values_at(point, sheet.normal, tau, [albedo; 3], eye, &no_sky)
+                                .unwrap();
+                        let sky = (with[0] - without[0]) * albedo;
+                        largest_sky_share = largest_sky_share.max(sky / (with[0] * albedo));
+                        (
+                            [0, 1, 2]
+                                .map(|c| f64::from(background[c]) * alpha[c] + albedo * with[c]),
+                            alpha[0],
+                            [0, 1, 2].map(|c| {
+                                LOOKUP_RELATIVE_TOLERANCE * (with[c] - without[c]).abs() * albedo
+                            }),
+                        )
+                    }
+                    None => (background.map(f64::from), 1.0, [0.0; 3]),
+                },
+                |x, y| u32::from(hit(x, y).is_some()),
+            );
+            assert!(
+                result.covered > 300,
+                "case {case} view {view}: {}",
+                result.covered
+            );
+            println!(
+                "sky case {case} view {view}: worst error/tolerance {:.3}, relative {:e}",
+                result.worst_ratio, result.worst_relative
+            );
+
+            // The per-vertex and CPU paths on a fine sheet, against per-fragment.
+            let segments = 32;
+            let fine = sheet.mesh(segments);
+            let render = |renderer: &mut HeadlessRenderer, path| {
+                renderer
+                    .render(
+                        &fine,
+                        &camera,
+                        &shading,
+                        &Background::Uniform(background),
+                        path,
+                    )
+                    .unwrap()
+            };
+            let fragment = render(&mut renderer, EvaluationPath::PerFragment);
+            let vertex = render(&mut renderer, EvaluationPath::PerVertex);
+            let cpu = render(&mut renderer, EvaluationPath::Cpu);
+            let composite = |s: f64, t: f64| {
+                let point = sheet.origin + s * sheet.u + t * sheet.v;
+                let (radiance, alpha) = slab_values_at(
+                    point,
+                    sheet.normal,
+                    [f64::from(tau); 3],
+                    [albedo; 3],
+                    eye,
+                    &shading,
+                )
+                .unwrap();
+                [0, 1, 2].map(|c| f64::from(background[c]) * alpha[c] + albedo * radiance[c])
+            };
+            let second_difference = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+                (0..3)
+                    .map(|k| (a[k] - 2.0 * b[k] + c[k]).abs())
+                    .fold(0.0, f64::max)
+            };
+            let h = 1.0 / f64::from(segments);
+            let mut curvature: f64 = 0.0;
+            for i in 1..segments {
+                for j in 1..segments {
+                    let (s, t) = (f64::from(i) * h, f64::from(j) * h);
+                    let centre = composite(s, t);
+                    curvature = curvature.max(
+                        second_difference(composite(s + h, t), centre, composite(s - h, t))
+                            + second_difference(composite(s, t + h), centre, composite(s, t - h))
+                            + second_difference(
+                                composite(s + h, t + h),
+                                centre,
+                                composite(s - h, t - h),
+                            ),
+                    );
+                }
+            }
+            let bound = 2.0 * curvature / 8.0;
+            for (index, ((f, v), c)) in fragment
+                .pixels
+                .iter()
+                .zip(&vertex.pixels)
+                .zip(&cpu.pixels)
+                .enumerate()
+            {
+                for channel in 0..3 {
+                    let (f, v, c) = (
+                        f64::from(f[channel]),
+                        f64::from(v[channel]),
+                        f64::from(c[channel]),
+                    );
+                    let lookup = LOOKUP_RELATIVE_TOLERANCE * f.abs();
+                    assert!(
+                        (v - f).abs() <= bound + lookup + 64.0 * epsilon * f.abs() + 1e-7,
+                        "case {case} view {view} pixel {index}: per-vertex {v} vs per-fragment {f} \
+                         (bound {bound:e})"
+                    );
+                    assert!(
+                        (c - v).abs() <= 2.0 * lookup + 64.0 * epsilon * v.abs() + 1e-7,
+                        "case {case} view {view} pixel {index}: CPU path {c} vs per-vertex {v}"
+                    );
+                }
+            }
+        }
+    }
+    // The comparison has power: sky light is a large part of what is compared.
+    assert!(largest_sky_share > 0.5, "{largest_sky_share}");
+}
+
+/// Sky light only adds light, and a scene without it renders exactly as before.
+#[test]
+fn sky_light_only_adds_light_and_off_changes_nothing() {
+    let Some(mut renderer) = renderer(WIDTH, HEIGHT) else {
+        return;
+    };
+    let mesh = SlabMesh::flat_sheet(
+        Vec3::new(-0.6, -0.45, 0.0),
+        Vec3::X * 1.2,
+        Vec3::Y * 0.9,
+        Vec3::Z,
+        6,
+        6,
+    )
+    .unwrap();
+    let camera = camera(Vec3::new(0.3, 0.2, 1.8));
+    let background = Background::Uniform([0.3, 0.3, 0.3]);
+    let plain = ShadingParams::uniform(2.0, 0.9, Vec3::new(-0.4, 0.5, -1.3), 40.0).unwrap();
+    let sky = ShadingParams {
+        sky: Some(daylight()),
+        ..plain.clone()
+    };
+    for path in [
+        EvaluationPath::PerFragment,
+        EvaluationPath::PerVertex,
+        EvaluationPath::Cpu,
+    ] {
+        let before = renderer
+            .render(&mesh, &camera, &plain, &background, path)
+            .unwrap();
+        let lit = renderer
+            .render(&mesh, &camera, &sky, &background, path)
+            .unwrap();
+        let after = renderer
+            .render(&mesh, &camera, &plain, &background, path)
+            .unwrap();
+        assert_eq!(before, after, "{path:?}");
+        let mut covered = 0;
+        for (p, s) in before.pixels.iter().zip(&lit.pixels) {
+            assert_eq!(
+                p[3], s[3],
+                "{path:?}: α is the direct transmission either way"
+            );
+            if p[3] < 1.0 {
+                covered += 1;
+                for c in 0..3 {
+                    assert!(s[c] > p[c], "{path:?}: {s:?} vs {p:?}");
+                }
+            }
+        }
+        assert!(covered > 300, "{path:?}: {covered}");
+    }
+}

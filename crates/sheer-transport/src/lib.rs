@@ -12,7 +12,9 @@
 //! * [`hfunction`]: Chandrasekhar's H-function for isotropic scattering (the semi-infinite limit);
 //! * [`monte_carlo`]: an analog photon-transport simulation of the same slab, used to check the solver;
 //! * [`table`]: a precomputed table of the multiply-scattered radiance over (τ1, μ0, μ, Λ) with its
-//!   quadrilinear sampler, for real-time use.
+//!   quadrilinear sampler, for real-time use;
+//! * [`diffuse`]: the all-orders response `R_d(μ)`, `T_d(μ)` to uniform radiance over a whole face's
+//!   hemisphere, and its table over (τ1, Λ, μ) on the same axes.
 //!
 //! Conventions used throughout: optical depths are dimensionless; `μ0` is the cosine between the surface
 //! normal and the direction towards the light, `μ` the cosine between the normal of the surface the light
@@ -20,6 +22,7 @@
 //! unit irradiance (W m⁻²) measured on a plane normal to the incident beam (so the flux crossing the lit
 //! surface is `μ0` per unit area), which is eqs. (4)–(5) with `E(0) = 1` and `μ0` counted once.
 
+pub mod diffuse;
 pub mod expint;
 pub mod hfunction;
 pub mod monte_carlo;
@@ -31,8 +34,9 @@ pub mod table;
 mod linalg;
 mod validate;
 
+pub use diffuse::{DiffuseResponse, DiffuseTable};
 pub use hfunction::HFunction;
-pub use monte_carlo::{MonteCarloTally, simulate_photons};
+pub use monte_carlo::{Incidence, MonteCarloTally, simulate_photons, simulate_photons_diffuse};
 pub use single::{
     henyey_greenstein_phase, single_scattered_reflected_radiance,
     single_scattered_reflected_radiance_hg, single_scattered_transmitted_radiance,
@@ -81,8 +85,8 @@ pub enum TransportError {
         /// Upper end of the table.
         max: f64,
     },
-    /// The table file is not a valid all-orders table.
-    #[error("malformed all-orders table: {0}")]
+    /// The file is not a valid all-orders or diffuse table.
+    #[error("malformed table file: {0}")]
     TableFormat(String),
     /// Monte Carlo photon count must be positive.
     #[error("photon count must be > 0")]

@@ -2,10 +2,20 @@
 //! in optical depth, absorption with probability `1 − Λ` at each interaction, isotropic re-emission.
 //! It shares no code with the deterministic solver, which makes it an independent check.
 //!
-//! Photons are counted into uniform bins of the emergent cosine μ on each face. A photon that leaves
-//! through the lit face in band `[μa, μb]` contributes flux `μ0 / N` (the beam delivers flux `μ0` per unit
-//! area for unit irradiance normal to it), so the binned flux estimates `2π ∫_{μa}^{μb} L(μ) μ dμ`.
-//! Counts are binomial, so a bin's standard error is `μ0 √(p(1−p)/N)` with `p` the fraction counted.
+//! Photons are counted into uniform bins of the emergent cosine μ on each face. Each of the N photons
+//! stands for `F_in / N` of the flux `F_in` the light delivers per unit area of the lit face
+//! ([`Incidence::flux`]), so the binned flux of a band `[μa, μb]` estimates `2π ∫_{μa}^{μb} L(μ) μ dμ`:
+//!
+//! * a beam at μ0 ([`simulate_photons`]) of unit irradiance normal to it delivers `F_in = μ0`, and `L` is
+//!   the solver's radiance per unit normal irradiance;
+//! * uniform unit radiance over the lit face's hemisphere ([`simulate_photons_diffuse`]) delivers
+//!   `F_in = ∫ μ0 dΩ = π`; a photon arriving from it has μ0 distributed with density `2μ0` (the
+//!   photons crossing unit area from `dΩ` are proportional to `μ0 dΩ`), drawn as `μ0 = √(1 − U)`. The
+//!   emergent radiance is then `L = R_d(μ)` (lit face) or `T_d(μ)` (unlit face) of [`crate::diffuse`], so a
+//!   band's flux estimates `2π ∫_{μa}^{μb} R_d(μ) μ dμ` (or `T_d`), the direct count
+//!   `2π ∫_0^1 e^{−τ1/μ} μ dμ = 2π E3(τ1)`, and the absorbed count `2π ∫_0^1 A(μ) μ dμ`.
+//!
+//! Counts are binomial, so a bin's standard error is `F_in √(p(1−p)/N)` with `p` the fraction counted.
 //!
 //! Randomness: xoshiro256++ (Blackman & Vigna 2018) seeded per batch of photons through splitmix64, so
 //! results depend only on the seed and photon count, not on the number of rayon threads.
@@ -13,6 +23,39 @@
 use rayon::prelude::*;
 
 use crate::{Result, TransportError, validate};
+
+/// How photons enter the lit face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Incidence {
+    /// A collimated beam at cosine `mu0` ∈ (0, 1] of unit irradiance normal to it.
+    Beam {
+        /// Incident cosine μ0.
+        mu0: f64,
+    },
+    /// Uniform unit radiance over the lit face's whole hemisphere (cosine-weighted directions).
+    Diffuse,
+}
+
+impl Incidence {
+    /// Flux delivered per unit area of the lit face (W m⁻² per unit normal irradiance for a beam, per
+    /// unit radiance in W m⁻² sr⁻¹ for diffuse light): `μ0`, or `π` for diffuse light.
+    pub fn flux(&self) -> f64 {
+        match *self {
+            Incidence::Beam { mu0 } => mu0,
+            Incidence::Diffuse => std::f64::consts::PI,
+        }
+    }
+
+    /// The inward cosine of the next photon (the only thing that differs between incidences).
+    fn draw_cosine(&self, rng: &mut Xoshiro256PlusPlus) -> f64 {
+        match *self {
+            Incidence::Beam { mu0 } => mu0,
+            // Density 2μ0 on (0, 1]: inverse of the distribution μ0², with 1 − U ∈ (0, 1] so that no
+            // photon runs parallel to the face.
+            Incidence::Diffuse => (1.0 - rng.uniform()).sqrt(),
+        }
+    }
+}
 
 /// Photons per independently seeded batch (the unit of parallel work).
 const BATCH: u64 = 1 << 16;
@@ -68,8 +111,8 @@ impl Xoshiro256PlusPlus {
 pub struct MonteCarloTally {
     /// Photons launched.
     pub photons: u64,
-    /// Incident cosine μ0 of the beam.
-    pub mu0: f64,
+    /// How they entered (the flux each stands for: [`Incidence::flux`] / photons).
+    pub incidence: Incidence,
     /// Scattered photons leaving the lit face, per uniform μ bin.
     pub reflected: Vec<u64>,
     /// Scattered photons leaving the unlit face, per uniform μ bin.
@@ -81,11 +124,11 @@ pub struct MonteCarloTally {
 }
 
 impl MonteCarloTally {
-    /// A tally of no photons at `mu0`, `bins` empty bins a face.
-    fn empty(mu0: f64, bins: usize) -> Self {
+    /// A tally of no photons under `incidence`, `bins` empty bins a face.
+    fn empty(incidence: Incidence, bins: usize) -> Self {
         MonteCarloTally {
             photons: 0,
-            mu0,
+            incidence,
             reflected: vec![0; bins],
             transmitted: vec![0; bins],
             direct: 0,
@@ -93,7 +136,7 @@ impl MonteCarloTally {
         }
     }
 
-    /// The photons of `self` and `other` (the same beam and bins) in one tally.
+    /// The photons of `self` and `other` (the same incidence and bins) in one tally.
     fn merged(mut self, other: Self) -> Self {
         self.photons += other.photons;
         for (sum, add) in self.reflected.iter_mut().zip(&other.reflected) {
@@ -118,8 +161,9 @@ impl MonteCarloTally {
         (index as f64 / n, (index + 1) as f64 / n)
     }
 
-    /// Estimated flux and its standard error for `count` of the photons (per unit normal irradiance);
-    /// a count beyond the photons launched is an error (its variance would be negative: NaN).
+    /// Estimated flux and its standard error for `count` of the photons (per unit normal irradiance of
+    /// a beam, per unit radiance of diffuse light; see the module docs); a count beyond the photons
+    /// launched is an error (its variance would be negative: NaN).
     pub fn flux_with_error(&self, count: u64) -> Result<(f64, f64)> {
         if self.photons == 0 {
             return Err(TransportError::PhotonCount);
@@ -131,9 +175,10 @@ impl MonteCarloTally {
             });
         }
         let p = count as f64 / self.photons as f64;
+        let flux = self.incidence.flux();
         Ok((
-            self.mu0 * p,
-            self.mu0 * (p * (1.0 - p) / self.photons as f64).sqrt(),
+            flux * p,
+            flux * (p * (1.0 - p) / self.photons as f64).sqrt(),
         ))
     }
 }
@@ -152,9 +197,37 @@ pub fn simulate_photons(
     bins: usize,
     seed: u64,
 ) -> Result<MonteCarloTally> {
+    simulate(tau1, albedo, Incidence::Beam { mu0 }, photons, bins, seed)
+}
+
+/// Launches `photons` photons from uniform radiance over the lit face's hemisphere (cosine-weighted
+/// directions, module docs) into a slab of optical thickness `tau1` and albedo Λ, tallying emergent
+/// scattered photons into `bins` uniform μ bins per face. Deterministic in `seed`. Binned fluxes are
+/// per unit incident radiance and estimate `2π ∫ R_d(μ) μ dμ` and `2π ∫ T_d(μ) μ dμ` over each band.
+pub fn simulate_photons_diffuse(
+    tau1: f64,
+    albedo: f64,
+    photons: u64,
+    bins: usize,
+    seed: u64,
+) -> Result<MonteCarloTally> {
+    simulate(tau1, albedo, Incidence::Diffuse, photons, bins, seed)
+}
+
+/// The photon loop shared by both incidences; only the initial direction differs.
+fn simulate(
+    tau1: f64,
+    albedo: f64,
+    incidence: Incidence,
+    photons: u64,
+    bins: usize,
+    seed: u64,
+) -> Result<MonteCarloTally> {
     validate::optical_thickness(tau1)?;
     validate::albedo(albedo)?;
-    validate::incident_cosine(mu0)?;
+    if let Incidence::Beam { mu0 } = incidence {
+        validate::incident_cosine(mu0)?;
+    }
     if photons == 0 {
         return Err(TransportError::PhotonCount);
     }
@@ -170,10 +243,10 @@ pub fn simulate_photons(
             let count = BATCH.min(photons - batch * BATCH);
             let mut seed_state = seed ^ batch.wrapping_mul(0xd1b5_4a32_d192_ed03);
             let mut rng = Xoshiro256PlusPlus::seeded(splitmix64(&mut seed_state));
-            simulate_batch(tau1, albedo, mu0, count, bins, &mut rng)
+            simulate_batch(tau1, albedo, incidence, count, bins, &mut rng)
         })
         .reduce(
-            || MonteCarloTally::empty(mu0, bins),
+            || MonteCarloTally::empty(incidence, bins),
             MonteCarloTally::merged,
         );
     Ok(total)
@@ -182,20 +255,20 @@ pub fn simulate_photons(
 fn simulate_batch(
     tau1: f64,
     albedo: f64,
-    mu0: f64,
+    incidence: Incidence,
     photons: u64,
     bins: usize,
     rng: &mut Xoshiro256PlusPlus,
 ) -> MonteCarloTally {
     let mut tally = MonteCarloTally {
         photons,
-        ..MonteCarloTally::empty(mu0, bins)
+        ..MonteCarloTally::empty(incidence, bins)
     };
     let bin_of = |mu: f64| ((mu * bins as f64) as usize).min(bins - 1);
     for _ in 0..photons {
         // Depth below the lit face and direction cosine along +depth (into the slab).
         let mut depth = 0.0;
-        let mut inward_cosine = mu0;
+        let mut inward_cosine = incidence.draw_cosine(rng);
         let mut scattered = false;
         loop {
             // 1 − U lies in (0, 1], so the logarithm is finite.

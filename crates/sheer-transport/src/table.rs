@@ -27,7 +27,8 @@
 //! (min, max), `u64` checksum, then `f32` values `[side][tau][albedo][mu0][mu]` with side 0 =
 //! reflected, 1 = transmitted. The checksum is FNV-1a (64-bit) over every byte of the file but its own
 //! eight: any one changed byte changes it (each step `h ← (h ⊕ b)·p` is a bijection of `h` for a
-//! fixed byte and of `b` for a fixed `h`), so a damaged file is refused on load.
+//! fixed byte and of `b` for a fixed `h`), so a damaged file is refused on load. The same header,
+//! checks and checksum serve [`crate::diffuse`]'s table, under its own magic and version.
 
 use std::path::Path;
 
@@ -39,8 +40,9 @@ use crate::{Result, TransportError, validate};
 
 const MAGIC: &[u8; 8] = b"SHEERAOT";
 const VERSION: u32 = 2;
-/// Albedo used for the Λ = 0 node, where `L_m / Λ²` is a limit.
-const ALBEDO_FLOOR: f64 = 1.0e-8;
+/// Albedo used for the Λ = 0 node, where `L_m / Λ²` (here) and `R_d / Λ` ([`crate::diffuse`]) are
+/// limits.
+pub(crate) const ALBEDO_FLOOR: f64 = 1.0e-8;
 /// Largest node count accepted on any axis: far above any useful grid, and small enough that the
 /// value count `2 n_tau n_albedo n_cosine²` cannot overflow `usize` (a corrupt header must not wrap).
 const MAX_AXIS_COUNT: usize = 4096;
@@ -76,7 +78,9 @@ impl Default for TableSpec {
 }
 
 impl TableSpec {
-    fn validate(&self) -> Result<()> {
+    /// Checks node counts (against [`MAX_AXIS_COUNT`] and overflow of the all-orders table's size, the
+    /// larger of the two tables on these axes) and the τ1 range.
+    pub(crate) fn validate(&self) -> Result<()> {
         if self.tau_count < 2 || self.albedo_count < 2 || self.cosine_count < 3 {
             return Err(TransportError::TableFormat(
                 "need at least 2 tau, 2 albedo and 3 cosine nodes".into(),
@@ -133,15 +137,15 @@ impl TableSpec {
         x * x
     }
 
-    fn tau_node(&self, index: usize) -> f64 {
+    pub(crate) fn tau_node(&self, index: usize) -> f64 {
         self.tau_at(index as f64)
     }
 
-    fn albedo_node(&self, index: usize, tau1: f64) -> f64 {
+    pub(crate) fn albedo_node(&self, index: usize, tau1: f64) -> f64 {
         self.albedo_at(index as f64, tau1)
     }
 
-    fn cosine_node(&self, index: usize) -> f64 {
+    pub(crate) fn cosine_node(&self, index: usize) -> f64 {
         self.cosine_at(index as f64)
     }
 
@@ -151,6 +155,68 @@ impl TableSpec {
 
     fn values_per_side(&self) -> usize {
         self.tau_count * self.albedo_count * self.block()
+    }
+
+    /// Validates τ1 against the axis range; its (lower node, weight) on the τ1 axis.
+    pub(crate) fn tau_position(&self, tau1: f64) -> Result<(usize, f64)> {
+        validate::optical_thickness(tau1)?;
+        // A relative slack of 1e-12 admits the end values despite rounding.
+        if tau1 < self.tau_min * (1.0 - 1e-12) || tau1 > self.tau_max * (1.0 + 1e-12) {
+            return Err(TransportError::OutsideTable {
+                name: "tau1",
+                value: tau1,
+                min: self.tau_min,
+                max: self.tau_max,
+            });
+        }
+        let (c0, c1) = (tau_coordinate(self.tau_min), tau_coordinate(self.tau_max));
+        let tau_unit = ((tau_coordinate(tau1) - c0) / (c1 - c0)).clamp(0.0, 1.0);
+        Ok(axis_position(tau_unit, self.tau_count))
+    }
+
+    /// The τ1 axis in its coordinate `c = ln τ1 + τ1`: `(c(tau_min), c(tau_max))`.
+    pub(crate) fn tau_coordinate_range(&self) -> (f64, f64) {
+        (tau_coordinate(self.tau_min), tau_coordinate(self.tau_max))
+    }
+}
+
+/// The albedo warp of every τ1 node of a spec, cached for the samplers (recomputing a node's τ1
+/// inverts `ln τ + τ` by Newton's method).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct AlbedoWarps {
+    /// Warp strength β of every τ1 node.
+    strengths: Vec<f64>,
+    /// `e^β − 1` of every τ1 node.
+    scales: Vec<f64>,
+    /// Nodes on the albedo axis.
+    count: usize,
+}
+
+impl AlbedoWarps {
+    pub(crate) fn new(spec: &TableSpec) -> Self {
+        let strengths: Vec<f64> = (0..spec.tau_count)
+            .map(|t| albedo_warp_strength(spec.tau_node(t)))
+            .collect();
+        let scales = strengths.iter().map(|beta| beta.exp_m1()).collect();
+        Self {
+            strengths,
+            scales,
+            count: spec.albedo_count,
+        }
+    }
+
+    /// β of every τ1 node.
+    pub(crate) fn strengths(&self) -> &[f64] {
+        &self.strengths
+    }
+
+    /// (lower node, weight) on the albedo axis of τ1 node `tau_node` for `s = √(1−Λ)`: the axis is
+    /// warped per τ1 node, so each τ1 neighbour of a query has its own Λ position.
+    pub(crate) fn position(&self, tau_node: usize, s: f64) -> (usize, f64) {
+        axis_position(
+            albedo_coordinate(s, self.strengths[tau_node], self.scales[tau_node]),
+            self.count,
+        )
     }
 }
 
@@ -169,11 +235,8 @@ pub struct AllOrdersTable {
     spec: TableSpec,
     /// `ln(L_m/(Λ² μ0))`, `[side][tau][albedo][mu0][mu]`.
     values: Vec<f32>,
-    /// Albedo-warp strength β of every τ1 node (derived from `spec`; cached because recomputing a
-    /// node's τ1 inverts `ln τ + τ` by Newton's method).
-    warp_strengths: Vec<f64>,
-    /// `e^β − 1` of every τ1 node, likewise cached for the sampler.
-    warp_scales: Vec<f64>,
+    /// The albedo warp of every τ1 node (derived from `spec`).
+    warps: AlbedoWarps,
 }
 
 /// Reciprocity-filled `[mu0][mu]` blocks (reflected, transmitted) of `ln f` for one (τ1, Λ).
@@ -255,9 +318,143 @@ fn file_checksum(bytes: &[u8]) -> u64 {
     fnv1a_64([&bytes[..CHECKSUM_OFFSET], &bytes[HEADER_BYTES..]])
 }
 
+/// What distinguishes one table file format from another sharing this header and its checks.
+pub(crate) struct TableFileFormat {
+    /// The first eight bytes.
+    pub(crate) magic: &'static [u8; 8],
+    /// The version this build reads and writes.
+    pub(crate) version: u32,
+    /// The example that regenerates the shipped file (named in the version error).
+    pub(crate) example: &'static str,
+    /// Number of `f32` values for a validated spec, `None` on overflow.
+    pub(crate) value_count: fn(&TableSpec) -> Option<usize>,
+}
+
+/// The all-orders table's format (this module's docs).
+const ALL_ORDERS_FORMAT: TableFileFormat = TableFileFormat {
+    magic: MAGIC,
+    version: VERSION,
+    example: "make_table",
+    value_count: |spec| spec.checked_values_per_side()?.checked_mul(2),
+};
+
+/// Serialises header, values and checksum (layout in this module's docs).
+pub(crate) fn encode_table_file(
+    format: &TableFileFormat,
+    spec: &TableSpec,
+    values: &[f32],
+) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(HEADER_BYTES + 4 * values.len());
+    bytes.extend_from_slice(format.magic);
+    bytes.extend_from_slice(&format.version.to_le_bytes());
+    for count in [spec.tau_count, spec.albedo_count, spec.cosine_count] {
+        bytes.extend_from_slice(&(count as u32).to_le_bytes());
+    }
+    bytes.extend_from_slice(&spec.tau_min.to_le_bytes());
+    bytes.extend_from_slice(&spec.tau_max.to_le_bytes());
+    bytes.extend_from_slice(&[0; 8]); // the checksum, filled in below
+    for value in values {
+        bytes.extend_from_slice(&value.to_le_bytes());
+    }
+    let checksum = file_checksum(&bytes);
+    bytes[CHECKSUM_OFFSET..HEADER_BYTES].copy_from_slice(&checksum.to_le_bytes());
+    bytes
+}
+
+/// Parses a table file, checking magic, version, sizes, that every value is finite and at most
+/// [`LOG_VALUE_MAX`], and, last, the checksum.
+pub(crate) fn decode_table_file(
+    format: &TableFileFormat,
+    bytes: &[u8],
+) -> Result<(TableSpec, Vec<f32>)> {
+    if bytes.get(..8) != Some(format.magic.as_slice()) {
+        return Err(TransportError::TableFormat("bad magic".into()));
+    }
+    let version = read_u32(bytes, 8)?;
+    if version != format.version {
+        return Err(TransportError::TableFormat(format!(
+            "unsupported version {version} (this build reads version {}; regenerate the table with \
+             `cargo run -p sheer-transport --release --example {}`)",
+            format.version, format.example
+        )));
+    }
+    let spec = TableSpec {
+        tau_count: read_u32(bytes, 12)? as usize,
+        albedo_count: read_u32(bytes, 16)? as usize,
+        cosine_count: read_u32(bytes, 20)? as usize,
+        tau_min: read_f64(bytes, 24)?,
+        tau_max: read_f64(bytes, 32)?,
+    };
+    spec.validate()?;
+    let value_count = (format.value_count)(&spec)
+        .ok_or_else(|| TransportError::TableFormat("table size overflows".into()))?;
+    let expected = value_count
+        .checked_mul(4)
+        .and_then(|n| n.checked_add(HEADER_BYTES))
+        .ok_or_else(|| TransportError::TableFormat("table size overflows".into()))?;
+    if bytes.len() != expected {
+        return Err(TransportError::TableFormat(format!(
+            "expected {expected} bytes, found {}",
+            bytes.len()
+        )));
+    }
+    let values: Vec<f32> = bytes[HEADER_BYTES..]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    if values.len() != value_count {
+        return Err(TransportError::TableFormat(format!(
+            "expected {value_count} values, found {}",
+            values.len()
+        )));
+    }
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(TransportError::TableFormat("non-finite value".into()));
+    }
+    // A finite value can still be no slab's: e^{ln f} of a huge ln f is an infinite radiance in the
+    // samplers; above LOG_VALUE_MAX the file is damaged.
+    if let Some(v) = values.iter().find(|v| **v > LOG_VALUE_MAX) {
+        return Err(TransportError::TableFormat(format!(
+            "stored logarithm {v:e} above {LOG_VALUE_MAX}, which no slab reaches"
+        )));
+    }
+    // Last, so that the checks above name what they find; this one catches any other change.
+    let stored = u64::from_le_bytes(
+        bytes[CHECKSUM_OFFSET..HEADER_BYTES]
+            .try_into()
+            .map_err(|_| TransportError::TableFormat("truncated header".into()))?,
+    );
+    let computed = file_checksum(bytes);
+    if stored != computed {
+        return Err(TransportError::TableFormat(format!(
+            "checksum mismatch (stored {stored:016x}, computed {computed:016x}): the file is damaged"
+        )));
+    }
+    Ok((spec, values))
+}
+
+/// Writes `bytes` beside `path` under a hidden temporary name (`.NAME.part-PID`, as the workspace's
+/// other writers) and renames it into place, so that an interrupted write never leaves a partial table
+/// under the table's name.
+pub(crate) fn write_table_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    let name = path.file_name().ok_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{} names no file", path.display()),
+        )
+    })?;
+    let mut hidden = std::ffi::OsString::from(".");
+    hidden.push(name);
+    hidden.push(format!(".part-{}", std::process::id()));
+    let partial = path.with_file_name(hidden);
+    std::fs::write(&partial, bytes)?;
+    Ok(std::fs::rename(&partial, path)?)
+}
+
 /// The largest stored `ln f` that [`AllOrdersTable::from_bytes`] accepts: far above any slab's (the
 /// solver's values span ln f ∈ [−15.6, −1.2] on the shipped table, and a thick slab's converge to the
-/// semi-infinite medium's), and far below 88.7, where `e^{ln f}` overflows `f32`. There is no lower
+/// semi-infinite medium's; [`crate::DiffuseTable`]'s `ln(R_d/Λ)`, `ln(T_d/Λ)` are ≤ 0, as `R_d + T_d ≤ Λ`:
+/// scattered light has met at least one interaction, each survived with probability Λ), and far below 88.7, where `e^{ln f}` overflows `f32`. There is no lower
 /// bound: a very negative `ln f` is a vanishing multiple-scattering term (deep slabs of low albedo
 /// transmit e⁻⁸⁰ and less), which `e^{ln f}` takes to 0, not to a wrong value.
 pub const LOG_VALUE_MAX: f32 = 10.0;
@@ -301,7 +498,7 @@ fn albedo_coordinate(s: f64, beta: f64, scale: f64) -> f64 {
 }
 
 /// Position of a coordinate on a uniform axis of `count` nodes spanning `[0, 1]`: (lower node, weight).
-fn axis_position(unit: f64, count: usize) -> (usize, f64) {
+pub(crate) fn axis_position(unit: f64, count: usize) -> (usize, f64) {
     let scaled = unit * (count - 1) as f64;
     let lower = (scaled.floor() as usize).min(count - 2);
     (lower, scaled - lower as f64)
@@ -337,15 +534,10 @@ impl AllOrdersTable {
 
     /// A table from validated grid sizes and values, with the derived per-node albedo warp.
     fn from_parts(spec: TableSpec, values: Vec<f32>) -> Self {
-        let warp_strengths: Vec<f64> = (0..spec.tau_count)
-            .map(|t| albedo_warp_strength(spec.tau_node(t)))
-            .collect();
-        let warp_scales = warp_strengths.iter().map(|beta| beta.exp_m1()).collect();
         Self {
+            warps: AlbedoWarps::new(&spec),
             spec,
             values,
-            warp_strengths,
-            warp_scales,
         }
     }
 
@@ -363,118 +555,32 @@ impl AllOrdersTable {
     /// The albedo-warp strength `β = 1.1 ln(1 + τ1)` of every τ1 node (`s = √(1−Λ) = (e^{βw} −
     /// 1)/(e^β − 1)` at albedo coordinate `w`), for samplers outside this crate.
     pub fn albedo_warp_strengths(&self) -> &[f64] {
-        &self.warp_strengths
+        self.warps.strengths()
     }
 
     /// The τ1 axis in its coordinate `c = ln τ1 + τ1`: `(c(tau_min), c(tau_max))`; nodes are uniform in
     /// `c` between these ends.
     pub fn tau_coordinate_range(&self) -> (f64, f64) {
-        (
-            tau_coordinate(self.spec.tau_min),
-            tau_coordinate(self.spec.tau_max),
-        )
+        self.spec.tau_coordinate_range()
     }
 
     /// Serialises to the file format described in the module docs.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut bytes = Vec::with_capacity(HEADER_BYTES + 4 * self.values.len());
-        bytes.extend_from_slice(MAGIC);
-        bytes.extend_from_slice(&VERSION.to_le_bytes());
-        for count in [
-            self.spec.tau_count,
-            self.spec.albedo_count,
-            self.spec.cosine_count,
-        ] {
-            bytes.extend_from_slice(&(count as u32).to_le_bytes());
-        }
-        bytes.extend_from_slice(&self.spec.tau_min.to_le_bytes());
-        bytes.extend_from_slice(&self.spec.tau_max.to_le_bytes());
-        bytes.extend_from_slice(&[0; 8]); // the checksum, filled in below
-        for value in &self.values {
-            bytes.extend_from_slice(&value.to_le_bytes());
-        }
-        let checksum = file_checksum(&bytes);
-        bytes[CHECKSUM_OFFSET..HEADER_BYTES].copy_from_slice(&checksum.to_le_bytes());
-        bytes
+        encode_table_file(&ALL_ORDERS_FORMAT, &self.spec, &self.values)
     }
 
-    /// Parses the file format, checking magic, version, sizes and that every value is finite and at most
-    /// [`LOG_VALUE_MAX`].
+    /// Parses the file format, checking magic, version, sizes, that every value is finite and at most
+    /// [`LOG_VALUE_MAX`], and the checksum.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
-        if bytes.get(..8) != Some(MAGIC.as_slice()) {
-            return Err(TransportError::TableFormat("bad magic".into()));
-        }
-        let version = read_u32(bytes, 8)?;
-        if version != VERSION {
-            return Err(TransportError::TableFormat(format!(
-                "unsupported version {version} (this build reads version {VERSION}; regenerate the \
-                 table with `cargo run -p sheer-transport --release --example make_table`)"
-            )));
-        }
-        let spec = TableSpec {
-            tau_count: read_u32(bytes, 12)? as usize,
-            albedo_count: read_u32(bytes, 16)? as usize,
-            cosine_count: read_u32(bytes, 20)? as usize,
-            tau_min: read_f64(bytes, 24)?,
-            tau_max: read_f64(bytes, 32)?,
-        };
-        spec.validate()?;
-        let expected = spec
-            .checked_values_per_side()
-            .and_then(|n| n.checked_mul(2 * 4))
-            .and_then(|n| n.checked_add(HEADER_BYTES))
-            .ok_or_else(|| TransportError::TableFormat("table size overflows".into()))?;
-        if bytes.len() != expected {
-            return Err(TransportError::TableFormat(format!(
-                "expected {expected} bytes, found {}",
-                bytes.len()
-            )));
-        }
-        let values: Vec<f32> = bytes[HEADER_BYTES..]
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        if values.len() != 2 * spec.values_per_side() {
-            return Err(TransportError::TableFormat(format!(
-                "expected {} values, found {}",
-                2 * spec.values_per_side(),
-                values.len()
-            )));
-        }
-        if values.iter().any(|v| !v.is_finite()) {
-            return Err(TransportError::TableFormat("non-finite value".into()));
-        }
-        // A finite value can still be no slab's: e^{ln f} of a huge ln f is an infinite radiance in
-        // the samplers; above LOG_VALUE_MAX the file is damaged.
-        if let Some(v) = values.iter().find(|v| **v > LOG_VALUE_MAX) {
-            return Err(TransportError::TableFormat(format!(
-                "value ln f = {v:e} above {LOG_VALUE_MAX}, which no slab reaches"
-            )));
-        }
-        // Last, so that the checks above name what they find; this one catches any other change.
-        let stored = u64::from_le_bytes(
-            bytes[CHECKSUM_OFFSET..HEADER_BYTES]
-                .try_into()
-                .map_err(|_| TransportError::TableFormat("truncated header".into()))?,
-        );
-        let computed = file_checksum(bytes);
-        if stored != computed {
-            return Err(TransportError::TableFormat(format!(
-                "checksum mismatch (stored {stored:016x}, computed {computed:016x}): the file is damaged"
-            )));
-        }
+        let (spec, values) = decode_table_file(&ALL_ORDERS_FORMAT, bytes)?;
         Ok(Self::from_parts(spec, values))
     }
 
     /// Writes the table file.
-    /// Written beside it under a temporary name and renamed into place, so that an interrupted write
-    /// never leaves a partial table under the table's name.
+    /// Written beside it under a hidden temporary name and renamed into place, so that an interrupted
+    /// write never leaves a partial table under the table's name.
     pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
-        let path = path.as_ref();
-        let mut partial = path.as_os_str().to_owned();
-        partial.push(format!(".part-{}", std::process::id()));
-        std::fs::write(&partial, self.to_bytes())?;
-        Ok(std::fs::rename(&partial, path)?)
+        write_table_file(path.as_ref(), &self.to_bytes())
     }
 
     /// Reads a table file.
@@ -525,20 +631,7 @@ impl AllOrdersTable {
 
     /// Validates τ1 against the table's range; its (lower node, weight) on the τ1 axis.
     fn tau_position(&self, tau1: f64) -> Result<(usize, f64)> {
-        validate::optical_thickness(tau1)?;
-        let spec = &self.spec;
-        // A relative slack of 1e-12 admits the end values despite rounding.
-        if tau1 < spec.tau_min * (1.0 - 1e-12) || tau1 > spec.tau_max * (1.0 + 1e-12) {
-            return Err(TransportError::OutsideTable {
-                name: "tau1",
-                value: tau1,
-                min: spec.tau_min,
-                max: spec.tau_max,
-            });
-        }
-        let (c0, c1) = (tau_coordinate(spec.tau_min), tau_coordinate(spec.tau_max));
-        let tau_unit = ((tau_coordinate(tau1) - c0) / (c1 - c0)).clamp(0.0, 1.0);
-        Ok(axis_position(tau_unit, spec.tau_count))
+        self.spec.tau_position(tau1)
     }
 
     /// Validates the cosines; their (lower node, weight) on the μ0 and μ axes.
@@ -574,10 +667,7 @@ impl AllOrdersTable {
         let s = (1.0 - albedo).sqrt();
         for (dt, ft) in [(0, 1.0 - wt), (1, wt)] {
             // The albedo axis is warped per τ1 node, so each τ1 neighbour has its own Λ position.
-            let (a0, wa) = axis_position(
-                albedo_coordinate(s, self.warp_strengths[t0 + dt], self.warp_scales[t0 + dt]),
-                spec.albedo_count,
-            );
+            let (a0, wa) = self.warps.position(t0 + dt, s);
             for (da, fa) in [(0, 1.0 - wa), (1, wa)] {
                 let base =
                     side_offset + ((t0 + dt) * spec.albedo_count + a0 + da) * spec.block() + corner;

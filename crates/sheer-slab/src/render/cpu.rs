@@ -13,6 +13,7 @@ use crate::model::{
     Albedo, Cosine, LitSide, OpticalThickness, SlabParameterError, direct_transmission,
     single_scattered_reflected_radiance, single_scattered_transmitted_radiance,
 };
+use crate::sky::sky_radiance_per_albedo;
 
 /// Cosines below this are evaluated at this value, as in `shaders/thin_slab.wgsl` (grazing guard).
 pub const COSINE_FLOOR: f64 = 1e-6;
@@ -88,7 +89,21 @@ pub fn slab_values_at(
         }
         _ => [0.0; 3],
     };
-    let mut radiance = [0.0; 3];
+    // Sky light lights both faces whatever the point light does (crate::sky).
+    let mut radiance = match &params.sky {
+        Some(sky) => {
+            let (min, max) = (sky.table.spec().tau_min, sky.table.spec().tau_max);
+            sky_radiance_per_albedo(
+                sky,
+                normal,
+                eye - position,
+                tau.map(|t| t.clamp(min, max)),
+                albedo.map(|a| a.clamp(0.0, 1.0)),
+                cos_mu.get(),
+            )?
+        }
+        None => [0.0; 3],
+    };
     let mut transmittance = [0.0; 3];
     for channel in 0..3 {
         transmittance[channel] = direct_transmission(optical_thickness[channel], cos_mu);
@@ -104,7 +119,7 @@ pub fn slab_values_at(
         } else {
             single_scattered_transmitted_radiance(optical_thickness[channel], unit, cos_mu0, cos_mu)
         };
-        radiance[channel] = (single + multiple_per_albedo[channel]) * irradiance;
+        radiance[channel] += (single + multiple_per_albedo[channel]) * irradiance;
     }
     Ok((radiance, transmittance))
 }
@@ -134,7 +149,8 @@ pub fn per_vertex_slab_values(
     params: &ShadingParams,
 ) -> Result<Vec<VertexSlab>, SlabParameterError> {
     let eye = eye.as_dvec3();
-    let all_orders = matches!(params.scattering, Scattering::AllOrders(_));
+    // The all-orders multiple part and the sky's response are not linear in Λ: they need the vertex's Λ.
+    let all_orders = matches!(params.scattering, Scattering::AllOrders(_)) || params.sky.is_some();
     (0..mesh.positions.len())
         .into_par_iter()
         .map(|vertex| {

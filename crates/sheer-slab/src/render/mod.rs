@@ -44,6 +44,8 @@ pub use scene::{
 
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};
 use crate::model::{IrradianceConvention, SlabParameterError};
+use crate::sky::DiffuseTable;
+use sheer_transport::TableSpec;
 
 const SHADER_BODY: &str = include_str!("../../../../shaders/thin_slab.wgsl");
 const LIT_SIDE: &str = include_str!("../../../../shaders/lit_side.wgsl");
@@ -296,6 +298,7 @@ struct PipelineKey {
     thickness: bool,
     all_orders: bool,
     multiple_at_vertex: bool,
+    sky: bool,
 }
 
 impl PipelineKey {
@@ -304,12 +307,13 @@ impl PipelineKey {
     /// sampled only when there is one (a software rasteriser would otherwise pay for the masked-off
     /// sample); the all-orders lookup exists only in all-orders pipelines, so single scattering runs
     /// exactly the code it ran before.
-    fn override_constants(self) -> [(&'static str, f64); 3] {
+    fn override_constants(self) -> [(&'static str, f64); 4] {
         let flag = |on: bool| if on { 1.0 } else { 0.0 };
         [
             ("per_channel_thickness", flag(self.dual)),
             ("has_thickness_texture", flag(self.thickness)),
             ("all_orders", flag(self.all_orders)),
+            ("sky_light", flag(self.sky)),
         ]
     }
 }
@@ -324,6 +328,8 @@ struct FrameUniform {
     albedo_scale: [f32; 4],
     background: [f32; 4],
     baseline: [f32; 4],
+    /// Sky light: the nine coefficients of E/π (`DiffuseEnvironment::shader_coefficients`).
+    sky: [[f32; 4]; 9],
 }
 
 #[repr(C)]
@@ -359,6 +365,16 @@ struct GpuTable {
     warp_view: wgpu::TextureView,
     axes: wgpu::Buffer,
     source: Option<Arc<AllOrdersTable>>,
+    /// The grid whose axes (`warp_view`, `axes`) are uploaded: the all-orders table's, or the diffuse
+    /// table's when only the sky needs them.
+    spec: Option<TableSpec>,
+}
+
+/// The diffuse (sky light) table on the GPU, with the table it was made from.
+struct GpuDiffuse {
+    _cells: wgpu::Texture,
+    view: wgpu::TextureView,
+    source: Option<Arc<DiffuseTable>>,
 }
 
 /// A renderer without a window: renders into a linear float texture and reads it back.
@@ -392,6 +408,7 @@ pub struct HeadlessRenderer {
     thickness: GpuTexture,
     background: GpuTexture,
     table: GpuTable,
+    diffuse: GpuDiffuse,
     vertex_buffer: Option<(wgpu::Buffer, usize)>,
     cpu_buffer: Option<(wgpu::Buffer, usize)>,
     /// The multiple part per vertex, both faces (6 floats per vertex), written by the compute pass.
@@ -603,6 +620,7 @@ impl HeadlessRenderer {
                 // The all-orders table: also read by the compute check of the lookup.
                 table_entry(5),
                 table_entry(6),
+                table_entry(8),
                 wgpu::BindGroupLayoutEntry {
                     binding: 7,
                     visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
@@ -655,7 +673,10 @@ impl HeadlessRenderer {
             (1, &[0.0; 4]),
             AllOrdersAxes::zeroed(),
             None,
+            None,
         );
+        // Without sky light a 1×1 stand-in for the diffuse table, as for the all-orders table.
+        let diffuse = Self::upload_diffuse_texture(&device, &queue, (1, 1, &[0.0; 4]), None);
         let mut renderer = Self {
             device,
             queue,
@@ -682,6 +703,7 @@ impl HeadlessRenderer {
             thickness,
             background,
             table,
+            diffuse,
             vertex_buffer: None,
             cpu_buffer: None,
             multiple_buffer: None,
@@ -767,8 +789,14 @@ impl HeadlessRenderer {
             return Err(RenderError::PerChannelAlphaUnsupported);
         }
         self.update_textures(shading, background)?;
-        if let Scattering::AllOrders(table) = &shading.scattering {
-            self.update_table(table)?;
+        match (&shading.scattering, &shading.sky) {
+            (Scattering::AllOrders(table), _) => self.update_table(table)?,
+            // The sky samples its table on the all-orders table's axes: upload the axes alone.
+            (Scattering::Single, Some(sky)) => self.update_axes(&sky.table)?,
+            (Scattering::Single, None) => {}
+        }
+        if let Some(sky) = &shading.sky {
+            self.update_diffuse(&sky.table)?;
         }
         let uniform = self.frame_uniform(camera, shading, background);
         self.queue
@@ -784,6 +812,12 @@ impl HeadlessRenderer {
             multiple_at_vertex: path == EvaluationPath::PerFragment
                 && matches!(shading.scattering, Scattering::AllOrders(_))
                 && shading.all_orders_sampling == AllOrdersSampling::PerVertex,
+            // The CPU path evaluates the sky per vertex itself; the baseline has none.
+            sky: shading.sky.is_some()
+                && matches!(
+                    path,
+                    EvaluationPath::PerFragment | EvaluationPath::PerVertex
+                ),
         };
         self.pipeline(key)?;
         let bind_group = self.bind_group();
@@ -1193,6 +1227,10 @@ impl HeadlessRenderer {
                 Background::Image(_) => [0.0, 0.0, 0.0, 1.0],
             },
             baseline: [shading.baseline_transmittance, 0.0, 0.0, 0.0],
+            sky: shading
+                .sky
+                .as_ref()
+                .map_or([[0.0; 4]; 9], |sky| sky.environment.shader_coefficients()),
         }
     }
 
@@ -1289,6 +1327,7 @@ impl HeadlessRenderer {
                 texture(4, &self.background.view),
                 texture(5, &self.table.cells_view),
                 texture(6, &self.table.warp_view),
+                texture(8, &self.diffuse.view),
                 wgpu::BindGroupEntry {
                     binding: 7,
                     resource: self.table.axes.as_entire_binding(),
@@ -1344,26 +1383,11 @@ impl HeadlessRenderer {
                 }
             }
         }
-        // Texel t: the albedo warps (e^β − 1, 1/β) of τ1 nodes t and t + 1 (one load per τ1 cell).
-        let warps: Vec<[f32; 2]> = table
-            .albedo_warp_strengths()
-            .iter()
-            .map(|&beta| [beta.exp_m1() as f32, (1.0 / beta) as f32])
-            .collect();
-        let warp: Vec<f32> = warps
-            .windows(2)
-            .flat_map(|pair| [pair[0][0], pair[0][1], pair[1][0], pair[1][1]])
-            .collect();
-        let (c0, c1) = table.tau_coordinate_range();
-        let axes = AllOrdersAxes {
-            tau: [
-                c0 as f32,
-                (1.0 / (c1 - c0)) as f32,
-                (taus - 1) as f32,
-                (albedos - 1) as f32,
-            ],
-            cosine: [cells as f32, (taus * cells) as f32, 0.0, 0.0],
-        };
+        let (warp, axes) = table_axes(
+            spec,
+            table.albedo_warp_strengths(),
+            table.tau_coordinate_range(),
+        );
         self.table = Self::upload_table_textures(
             &self.device,
             &self.queue,
@@ -1371,8 +1395,98 @@ impl HeadlessRenderer {
             ((taus - 1) as u32, &warp),
             axes,
             Some(Arc::clone(table)),
+            Some(spec),
         );
         Ok(())
+    }
+
+    /// Uploads the axes of the diffuse table's grid (with a 1×1 stand-in for the all-orders cells)
+    /// unless that grid's axes are already on the GPU.
+    fn update_axes(&mut self, diffuse: &DiffuseTable) -> Result<(), RenderError> {
+        let spec = diffuse.spec();
+        if self.table.spec == Some(spec) {
+            return Ok(());
+        }
+        let (warp, axes) = table_axes(
+            spec,
+            diffuse.albedo_warp_strengths(),
+            diffuse.tau_coordinate_range(),
+        );
+        self.table = Self::upload_table_textures(
+            &self.device,
+            &self.queue,
+            (1, 1, &[0.0; 4]),
+            ((spec.tau_count - 1) as u32, &warp),
+            axes,
+            None,
+            Some(spec),
+        );
+        Ok(())
+    }
+
+    /// Uploads the diffuse table unless it is the one already on the GPU. Texel (a·C + j, t) holds
+    /// (ln(R_d/Λ) at μ nodes j and j + 1, ln(T_d/Λ) at the same nodes) of τ1 node t, albedo node a; the
+    /// stored layout is [face][tau][albedo][mu].
+    fn update_diffuse(&mut self, table: &Arc<DiffuseTable>) -> Result<(), RenderError> {
+        if self
+            .diffuse
+            .source
+            .as_ref()
+            .is_some_and(|uploaded| Arc::ptr_eq(uploaded, table) || uploaded == table)
+        {
+            return Ok(());
+        }
+        let spec = table.spec();
+        let (taus, albedos, cosines) = (spec.tau_count, spec.albedo_count, spec.cosine_count);
+        let cells = cosines - 1;
+        let (width, height) = (albedos * cells, taus);
+        let max = self.device.limits().max_texture_dimension_2d;
+        if width > max as usize || height > max as usize {
+            return Err(RenderError::TableTooLarge {
+                width: width.min(u32::MAX as usize) as u32,
+                height: height.min(u32::MAX as usize) as u32,
+                max,
+            });
+        }
+        let values = table.log_values();
+        let value = |face: usize, t: usize, a: usize, j: usize| {
+            values[((face * taus + t) * albedos + a) * cosines + j]
+        };
+        let mut texels = vec![0.0f32; 4 * width * height];
+        for t in 0..taus {
+            for a in 0..albedos {
+                for j in 0..cells {
+                    let texel = 4 * (t * width + a * cells + j);
+                    texels[texel..texel + 4].copy_from_slice(&[
+                        value(0, t, a, j),
+                        value(0, t, a, j + 1),
+                        value(1, t, a, j),
+                        value(1, t, a, j + 1),
+                    ]);
+                }
+            }
+        }
+        self.diffuse = Self::upload_diffuse_texture(
+            &self.device,
+            &self.queue,
+            (width as u32, height as u32, &texels),
+            Some(Arc::clone(table)),
+        );
+        Ok(())
+    }
+
+    fn upload_diffuse_texture(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (width, height, texels): (u32, u32, &[f32]),
+        source: Option<Arc<DiffuseTable>>,
+    ) -> GpuDiffuse {
+        let (texture, view) = float_texture(device, queue, "diffuse table", width, height, texels);
+        GpuDiffuse {
+            _cells: texture,
+            view,
+            source,
+        }
     }
 
     fn upload_table_textures(
@@ -1382,43 +1496,12 @@ impl HeadlessRenderer {
         (warp_width, warp): (u32, &[f32]),
         axes: AllOrdersAxes,
         source: Option<Arc<AllOrdersTable>>,
+        spec: Option<TableSpec>,
     ) -> GpuTable {
-        let float_texture = |label: &'static str, width: u32, height: u32, data: &[f32]| {
-            let size = wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            };
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
-            queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &texture,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                bytemuck::cast_slice(data),
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(width * 16),
-                    rows_per_image: Some(height),
-                },
-                size,
-            );
-            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-            (texture, view)
-        };
-        let (cells_texture, cells_view) = float_texture("all-orders table", width, height, cells);
-        let (warp_texture, warp_view) = float_texture("all-orders warp", warp_width, 1, warp);
+        let (cells_texture, cells_view) =
+            float_texture(device, queue, "all-orders table", width, height, cells);
+        let (warp_texture, warp_view) =
+            float_texture(device, queue, "all-orders warp", warp_width, 1, warp);
         let axes_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("all-orders axes"),
             size: std::mem::size_of::<AllOrdersAxes>() as u64,
@@ -1433,6 +1516,7 @@ impl HeadlessRenderer {
             warp_view,
             axes: axes_buffer,
             source,
+            spec,
         }
     }
 
@@ -1723,6 +1807,77 @@ impl std::fmt::Debug for HeadlessRenderer {
             .field("dual_source", &self.dual_source)
             .finish_non_exhaustive()
     }
+}
+
+/// An `Rgba32Float` texture of `width × height` texels holding `data` (four floats a texel), and its view.
+fn float_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &'static str,
+    width: u32,
+    height: u32,
+    data: &[f32],
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let size = wgpu::Extent3d {
+        width,
+        height,
+        depth_or_array_layers: 1,
+    };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytemuck::cast_slice(data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(width * 16),
+            rows_per_image: Some(height),
+        },
+        size,
+    );
+    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    (texture, view)
+}
+
+/// The albedo warps (texel t: (e^β − 1, 1/β) of τ1 nodes t and t + 1, one load per τ1 cell) and the
+/// axes uniform of a table grid, shared by the all-orders and the diffuse table.
+fn table_axes(
+    spec: TableSpec,
+    warp_strengths: &[f64],
+    (c0, c1): (f64, f64),
+) -> (Vec<f32>, AllOrdersAxes) {
+    let warps: Vec<[f32; 2]> = warp_strengths
+        .iter()
+        .map(|&beta| [beta.exp_m1() as f32, (1.0 / beta) as f32])
+        .collect();
+    let warp: Vec<f32> = warps
+        .windows(2)
+        .flat_map(|pair| [pair[0][0], pair[0][1], pair[1][0], pair[1][1]])
+        .collect();
+    let (taus, albedos, cells) = (spec.tau_count, spec.albedo_count, spec.cosine_count - 1);
+    let axes = AllOrdersAxes {
+        tau: [
+            c0 as f32,
+            (1.0 / (c1 - c0)) as f32,
+            (taus - 1) as f32,
+            (albedos - 1) as f32,
+        ],
+        cosine: [cells as f32, (taus * cells) as f32, 0.0, 0.0],
+    };
+    (warp, axes)
 }
 
 /// Whether GPU tests may be skipped: `SHEER_SKIP_GPU_TESTS=1`. Without it, a missing adapter fails them.

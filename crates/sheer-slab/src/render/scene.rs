@@ -9,6 +9,7 @@ use thiserror::Error;
 
 use crate::all_orders::{Scattering, TABLE_RANGE_SLACK, table_tau_range};
 use crate::model::IrradianceConvention;
+use crate::sky::SkyLight;
 
 /// Why a mesh was rejected.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -385,6 +386,10 @@ impl Texture2d {
 /// Why shading parameters were rejected.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ShadingError {
+    /// The sky's diffuse table and the all-orders table must share their axes (the shader samples both
+    /// on one set).
+    #[error("the diffuse table and the all-orders table have different grids")]
+    TableAxes,
     /// Texture dimensions and texel count disagree.
     #[error("texture of {width}x{height} has {texels} texels")]
     TextureSize {
@@ -477,6 +482,8 @@ pub struct ShadingParams {
     /// Where the per-fragment path looks the all-orders table up (the other paths evaluate everything
     /// per vertex anyway).
     pub all_orders_sampling: AllOrdersSampling,
+    /// Daylight on both faces ([`crate::sky`]), or none (the paper's scene: the point light alone).
+    pub sky: Option<SkyLight>,
 }
 
 /// Where [`EvaluationPath::PerFragment`](super::EvaluationPath::PerFragment) looks the all-orders table
@@ -528,6 +535,7 @@ impl ShadingParams {
             baseline_transmittance: 0.2,
             scattering: Scattering::Single,
             all_orders_sampling: AllOrdersSampling::default(),
+            sky: None,
         };
         params.validate()?;
         Ok(params)
@@ -589,6 +597,16 @@ impl ShadingParams {
         }
         if let Scattering::AllOrders(table) = &self.scattering {
             self.validate_table_range(table_tau_range(table))?;
+        }
+        if let Some(sky) = &self.sky {
+            let spec = sky.table.spec();
+            self.validate_table_range((spec.tau_min, spec.tau_max))?;
+            // The shader samples both tables on one set of axes.
+            if let Scattering::AllOrders(table) = &self.scattering
+                && table.spec() != spec
+            {
+                return Err(ShadingError::TableAxes);
+            }
         }
         Ok(())
     }
