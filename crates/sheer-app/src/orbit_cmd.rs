@@ -176,7 +176,19 @@ pub fn run(args: &OrbitArgs) -> Result<(), CliError> {
         let picks: Vec<usize> = (0..args.frames)
             .map(|k| ((f64::from(k) * step).round() as usize).min(own.len() - 1))
             .collect();
-        let strip = strip_image(&paper, &own, &picks, &times, scene.shading.exposure);
+        let label = format!(
+            "this scene: {}{}",
+            match scene.shading.scattering {
+                Scattering::AllOrders => "all orders",
+                Scattering::Single => "single scattering",
+            },
+            if scene.environment.sky_light {
+                " + sky"
+            } else {
+                ""
+            }
+        );
+        let strip = strip_image(&paper, &own, &picks, &times, scene.shading.exposure, &label);
         sheer_slab::render::save_image_file(&strip, out, image::ImageFormat::Png)
             .map_err(|e| CliError::new(format!("cannot write {}: {e}", out.display())))?;
         eprintln!("wrote {}", out.display());
@@ -191,6 +203,7 @@ fn strip_image(
     picks: &[usize],
     times: &[f64],
     exposure: f32,
+    own_label: &str,
 ) -> RgbImage {
     let (w, h) = (paper[0].width / 2, paper[0].height / 2);
     let mut strip = RgbImage::new(w * picks.len() as u32, 2 * h);
@@ -223,12 +236,6 @@ fn strip_image(
         );
     }
     draw_label(&mut strip, "paper's model", 6.0, h as f32 - 20.0, 14.0);
-    draw_label(
-        &mut strip,
-        "default: all orders + sky",
-        6.0,
-        2.0 * h as f32 - 20.0,
-        14.0,
-    );
+    draw_label(&mut strip, own_label, 6.0, 2.0 * h as f32 - 20.0, 14.0);
     strip
 }

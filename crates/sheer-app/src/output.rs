@@ -191,7 +191,13 @@ pub mod interrupt {
             // and the files written so far are still whole.
             let _ = ctrlc::set_handler(|| {
                 if REQUESTED.swap(true, Ordering::SeqCst) {
-                    std::process::exit(130);
+                    // _exit, not exit: no atexit handlers run while the main thread may be inside the
+                    // GPU driver; the partial file, if any, is hidden and nothing else needs cleaning.
+                    // SAFETY: _exit takes no pointers and never returns.
+                    #[allow(unsafe_code)]
+                    unsafe {
+                        libc::_exit(130)
+                    };
                 }
             });
         });

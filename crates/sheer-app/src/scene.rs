@@ -94,7 +94,7 @@ impl Default for ShadingSection {
     fn default() -> Self {
         ShadingSection {
             model: ShadingModel::ThinSlab,
-            // Single scattering misses 27–87 % of the light at τ1 = 2 (docs/shading-model.md).
+            // Single scattering misses 49–87 % of the light at τ1 = 2 (docs/shading-model.md).
             scattering: Scattering::AllOrders,
             all_orders_lookup: AllOrdersLookup::Fragment,
             path: EvaluationPathName::Fragment,

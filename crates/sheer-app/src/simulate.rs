@@ -18,7 +18,7 @@ pub struct SimulateArgs {
     /// Scene file (TOML); default: the shipped default scene.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Number of frames to write (1/fps seconds apart; frame 0 is the scene at --time).
+    /// Number of frames to write (1/fps seconds apart; frame 0 is the scene at the frame nearest --time).
     #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
     pub frames: u32,
     /// Scene time of frame 0, s, in [0, 3600] (the flag is simulated up to it), as in `render`.

@@ -170,9 +170,9 @@ impl RadianceField {
                     .collect();
                 match values.as_slice() {
                     [Some(r), Some(g), Some(b)]
-                        if [r, g, b]
-                            .iter()
-                            .all(|v| v.is_finite() && (0.0..=1e6).contains(*v)) =>
+                        if [r, g, b].iter().all(|v| {
+                            v.is_finite() && (0.0..=crate::scene::MAX_RADIANCE).contains(*v)
+                        }) =>
                     {
                         self.error = None;
                         accepted = Some([*r, *g, *b]);
@@ -196,7 +196,7 @@ impl RadianceField {
 /// What the chosen scattering model costs in accuracy at the panel's τ1 and Λ: the table's own
 /// interpolation error (sheer-transport's README) for all orders, and single scattering's missing share
 /// of the lit and the far face's diffuse radiance against the all-orders table at μ0 = μ = 0.7.
-fn model_error_text(shading: &ShadingSection) -> String {
+fn model_error_text(shading: &ShadingSection, sky_light: bool) -> String {
     let (tau, albedo) = (
         f64::from(shading.optical_thickness[0]),
         f64::from(shading.albedo_scale[0]),
@@ -226,7 +226,13 @@ fn model_error_text(shading: &ShadingSection) -> String {
     match shading.scattering {
         // The table's interpolation error against the solver (sheer-transport's README).
         Scattering::AllOrders => format!(
-            "all orders: within 0.5 % (lit side) and 3.2 % (far side) of the exact slab; {single}"
+            "all orders: within 0.5 % (lit side) and 3.2 % (far side) of the exact slab{}; {single}",
+            // The diffuse table's interpolation error for μ ≥ 0.05 (sheer-transport's README).
+            if sky_light {
+                ", sky light within 1.4 % and 3.4 %"
+            } else {
+                ""
+            }
         ),
         Scattering::Single => single,
     }
@@ -500,7 +506,7 @@ impl SheerApp {
                     s.optical_thickness = [v as f32; 3];
                     shading_changed = true;
                 }
-                ui.small(model_error_text(s));
+                ui.small(model_error_text(s, self.flag.scene.environment.sky_light));
                 if let Some(v) = self.fields.albedo_scale.show(ui, in_range(0.0, 1.0)) {
                     s.albedo_scale = [v as f32; 3];
                     shading_changed = true;

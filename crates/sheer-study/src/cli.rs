@@ -342,8 +342,9 @@ fn write_file(path: &Path, text: &str) -> Result<(), StudyError> {
     crate::whole_file::write(path, text)
 }
 
+/// A CSV number in its shortest round-trip form (`{:?}`), or empty.
 fn optional(value: Option<f64>) -> String {
-    value.map_or(String::new(), |v| format!("{v:.6e}"))
+    value.map_or(String::new(), |v| format!("{v:?}"))
 }
 
 /// `name ×substeps, iterations` in words.
@@ -381,7 +382,7 @@ pub fn work_precision_csv(rows: &[Row]) -> String {
         let m = &r.metrics;
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{:.6e},{},{},{},{},{:.6e},{},{},{:.4},{:.3e},{},{}",
+            "{},{},{},{},{},{:?},{:?},{},{},{},{:?},{},{},{:?},{:?},{},{}",
             r.scene,
             r.particles,
             r.method.name(),
@@ -815,7 +816,7 @@ pub fn ablation_csv(rows: &[AblationRow]) -> String {
     for r in rows {
         let _ = writeln!(
             csv,
-            "{},\"{}\",{},{},{},{},{},{},{:.4},{},{},{},{},{},{},{},{},{}",
+            "{},\"{}\",{},{},{},{},{},{:?},{:?},{},{},{},{},{},{},{},{},{}",
             r.part,
             r.setting,
             r.method.name(),
@@ -1042,7 +1043,7 @@ pub fn stability_csv(map: &StabilityMap) -> String {
     for c in &map.cells {
         let _ = writeln!(
             csv,
-            "{},{},{:.6e},{},{}",
+            "{},{:?},{:?},{},{}",
             c.method.name(),
             c.stiffness,
             c.dt,

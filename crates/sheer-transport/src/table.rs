@@ -447,8 +447,11 @@ pub(crate) fn write_table_file(path: &Path, bytes: &[u8]) -> Result<()> {
     hidden.push(name);
     hidden.push(format!(".part-{}", std::process::id()));
     let partial = path.with_file_name(hidden);
-    std::fs::write(&partial, bytes)?;
-    Ok(std::fs::rename(&partial, path)?)
+    let written = std::fs::write(&partial, bytes).and_then(|()| std::fs::rename(&partial, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    Ok(written?)
 }
 
 /// The largest stored `ln f` that [`AllOrdersTable::from_bytes`] accepts: far above any slab's (the

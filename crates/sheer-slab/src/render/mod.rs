@@ -1336,6 +1336,19 @@ impl HeadlessRenderer {
         })
     }
 
+    /// A table texture of `width × height` texels fits the device, or the typed error.
+    fn check_table_size(&self, width: usize, height: usize) -> Result<(), RenderError> {
+        let max = self.device.limits().max_texture_dimension_2d;
+        if width > max as usize || height > max as usize {
+            return Err(RenderError::TableTooLarge {
+                width: width.min(u32::MAX as usize) as u32,
+                height: height.min(u32::MAX as usize) as u32,
+                max,
+            });
+        }
+        Ok(())
+    }
+
     /// Uploads the all-orders table unless it is the one already on the GPU.
     fn update_table(&mut self, table: &Arc<AllOrdersTable>) -> Result<(), RenderError> {
         if self
@@ -1350,14 +1363,7 @@ impl HeadlessRenderer {
         let (taus, albedos, cosines) = (spec.tau_count, spec.albedo_count, spec.cosine_count);
         let cells = cosines - 1;
         let (width, height) = (albedos * cells, 2 * taus * cells);
-        let max = self.device.limits().max_texture_dimension_2d;
-        if width > max as usize || height > max as usize {
-            return Err(RenderError::TableTooLarge {
-                width: width.min(u32::MAX as usize) as u32,
-                height: height.min(u32::MAX as usize) as u32,
-                max,
-            });
-        }
+        self.check_table_size(width, height)?;
         // Texel (a·C + j, (face·T + t)·C + k) = ln f at (μ0, μ) nodes (k, j), (k, j+1), (k+1, j),
         // (k+1, j+1); the stored layout is [face][tau][albedo][mu0][mu].
         let values = table.log_values();
@@ -1440,14 +1446,7 @@ impl HeadlessRenderer {
         let (taus, albedos, cosines) = (spec.tau_count, spec.albedo_count, spec.cosine_count);
         let cells = cosines - 1;
         let (width, height) = (albedos * cells, taus);
-        let max = self.device.limits().max_texture_dimension_2d;
-        if width > max as usize || height > max as usize {
-            return Err(RenderError::TableTooLarge {
-                width: width.min(u32::MAX as usize) as u32,
-                height: height.min(u32::MAX as usize) as u32,
-                max,
-            });
-        }
+        self.check_table_size(width, height)?;
         let values = table.log_values();
         let value = |face: usize, t: usize, a: usize, j: usize| {
             values[((face * taus + t) * albedos + a) * cosines + j]
