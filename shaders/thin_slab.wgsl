@@ -249,16 +249,6 @@ fn all_orders_log_face(nodes: AllOrdersChannels, albedos: AllOrdersChannelAlbedo
         all_orders_log_value_at(nodes.blue, albedos.blue, cosines, face_rows));
 }
 
-// The multiply-scattered radiance per unit albedo and unit irradiance normal to the beam,
-// L_m/Λ = Λ·μ0·e^{ln f} (sr⁻¹), per channel; τ1 grey unless `per_channel_thickness`.
-fn all_orders_multiple_per_albedo(tau: vec3<f32>, albedo: vec3<f32>, mu0: f32, mu: f32,
-        eye_on_lit_side: bool) -> vec3<f32> {
-    let nodes = all_orders_channels(tau);
-    let log_value = all_orders_log_face(nodes, all_orders_channel_albedos(nodes, albedo),
-        all_orders_cosines(mu0, mu), all_orders_face_rows(eye_on_lit_side));
-    return albedo * (mu0 * exp(log_value));
-}
-
 // f = L_m/(Λ²·μ0) per unit irradiance normal to the beam (sr⁻¹), the table's interpolated e^{ln f}, per
 // channel on both faces at once: the axes are shared, only the loads double.
 struct AllOrdersBothFaces {
@@ -315,15 +305,15 @@ fn sky_radiance_on_face(m: vec3<f32>) -> vec3<f32> {
 
 // The sky's radiance toward the eye per unit albedo: L_in(m)·R_d/Λ + L_in(−m)·T_d/Λ per channel, m the
 // normal of the face the eye sees, μ = |n·e| floored as the point light's is. A zero normal gets none.
-fn sky_radiance_per_albedo(normal: vec3<f32>, to_eye: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>)
-        -> vec3<f32> {
+// `nodes` and `albedos`: where τ1 and Λ fall on the tables' shared axes (the all-orders lookup of the same
+// fragment uses them too, so they are found once).
+fn sky_radiance_per_albedo(normal: vec3<f32>, to_eye: vec3<f32>, nodes: AllOrdersChannels,
+        albedos: AllOrdersChannelAlbedos) -> vec3<f32> {
     let length_squared = dot(normal, normal);
     let n = normal * inverseSqrt(select(1.0, length_squared, length_squared > 0.0));
     let s = dot(n, normalize(to_eye));
     let face = select(-n, n, s >= 0.0);
     let mu = clamp(abs(s), COSINE_FLOOR, 1.0);
-    let nodes = all_orders_channels(tau);
-    let albedos = all_orders_channel_albedos(nodes, albedo);
     let red = diffuse_log_values(nodes.red, albedos.red, mu);
     let green = diffuse_log_values(nodes.green, albedos.green, mu);
     let blue = diffuse_log_values(nodes.blue, albedos.blue, mu);
@@ -395,12 +385,19 @@ fn single_values(point: SlabPoint, tau: vec3<f32>) -> SlabValues {
 fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>) -> SlabValues {
     let point = slab_point(position, normal);
     var values = single_values(point, tau);
-    if all_orders {
-        values.radiance_per_albedo += all_orders_multiple_per_albedo(tau, albedo, point.mu0, point.mu,
-            point.eye_on_lit_side) * point.irradiance;
-    }
-    if sky_light {
-        values.radiance_per_albedo += sky_radiance_per_albedo(normal, frame.eye.xyz - position, tau, albedo);
+    if all_orders || sky_light {
+        let nodes = all_orders_channels(tau);
+        let albedos = all_orders_channel_albedos(nodes, albedo);
+        if all_orders {
+            // The multiply-scattered radiance per unit albedo, L_m/Λ = Λ·μ0·e^{ln f} per unit irradiance.
+            let log_value = all_orders_log_face(nodes, albedos, all_orders_cosines(point.mu0, point.mu),
+                all_orders_face_rows(point.eye_on_lit_side));
+            values.radiance_per_albedo += albedo * (point.mu0 * exp(log_value)) * point.irradiance;
+        }
+        if sky_light {
+            values.radiance_per_albedo += sky_radiance_per_albedo(normal, frame.eye.xyz - position, nodes,
+                albedos);
+        }
     }
     return values;
 }
@@ -504,8 +501,9 @@ fn fs_multiple_at_vertex(input: MultipleAtVertexVarying) -> SlabOutput {
     let reduced = select(input.multiple_far, input.multiple_lit, point.eye_on_lit_side);
     values.radiance_per_albedo += albedo * (point.mu0 * point.irradiance) * reduced;
     if sky_light {
+        let nodes = all_orders_channels(tau);
         values.radiance_per_albedo += sky_radiance_per_albedo(input.normal,
-            frame.eye.xyz - input.world_position, tau, albedo);
+            frame.eye.xyz - input.world_position, nodes, all_orders_channel_albedos(nodes, albedo));
     }
     return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
 }
