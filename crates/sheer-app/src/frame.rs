@@ -392,7 +392,7 @@ impl FrameRenderer {
     /// Finds an adapter (Mesa lavapipe or llvmpipe without a GPU) and loads the scene's textures.
     pub fn new(scene: &Scene) -> Result<FrameRenderer, CliError> {
         let (width, height) = (scene.render.width, scene.render.height);
-        let renderer = HeadlessRenderer::new(width, height)
+        let renderer = HeadlessRenderer::with_samples(width, height, scene.render.samples)
             .map_err(|e| CliError::new(format!("renderer: {e}")))?;
         let albedo_texture = match (&scene.static_sheet, &scene.shading.albedo_texture) {
             (Some(sheet), _) => {

@@ -249,6 +249,8 @@ pub struct RenderSection {
     pub fps: f32,
     /// Simulated seconds before the window shows its first frame (the flag starts at rest, flat).
     pub warmup: f32,
+    /// Samples per pixel: 4 for anti-aliased edges, 1 for none.
+    pub samples: u32,
 }
 
 impl Default for RenderSection {
@@ -259,6 +261,7 @@ impl Default for RenderSection {
             height: 512,
             fps: 60.0,
             warmup: 1.5,
+            samples: 4,
         }
     }
 }
@@ -841,6 +844,12 @@ impl Scene {
             "must lie in [16, 8192] pixels",
         )?;
         check(
+            matches!(r.samples, 1 | 4),
+            "render.samples",
+            r.samples,
+            "must be 4 (anti-aliased edges) or 1 (none)",
+        )?;
+        check(
             r.fps.is_finite() && (FPS_RANGE.0..=FPS_RANGE.1).contains(&r.fps),
             "render.fps",
             r.fps,
@@ -1254,6 +1263,7 @@ mod key_tests {
         ("render.width", "640"),
         ("render.height", "480"),
         ("render.fps", "30.0"),
+        ("render.samples", "1"),
         ("render.warmup", "0.5"),
         ("static_sheet.centre", "[0.5, 0.25, 0.0]"),
         ("static_sheet.size", "[2.0, 0.5]"),
@@ -1786,6 +1796,8 @@ mod key_tests {
             ("[render]\nwidth = 9000".into(), "render.width"),
             ("[render]\nheight = 8".into(), "render.height"),
             ("[render]\nheight = 10000".into(), "render.height"),
+            ("[render]\nsamples = 2".into(), "render.samples"),
+            ("[render]\nsamples = 0".into(), "render.samples"),
             ("[render]\nfps = 0.0".into(), "render.fps"),
             ("[render]\nfps = 0.5".into(), "render.fps"),
             ("[render]\nfps = 2000.0".into(), "render.fps"),

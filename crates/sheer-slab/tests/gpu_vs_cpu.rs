@@ -24,8 +24,10 @@ use sheer_slab::render::{
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 64;
 
+/// A renderer with four samples per pixel, as the app renders by default: every comparison below holds
+/// away from edges (the comparisons skip pixels whose neighbours see other surfaces).
 fn renderer(width: u32, height: u32) -> Option<HeadlessRenderer> {
-    match HeadlessRenderer::new(width, height) {
+    match HeadlessRenderer::with_samples(width, height, 4) {
         Ok(renderer) => {
             eprintln!(
                 "adapter: {} target {:?}",
@@ -188,7 +190,17 @@ fn model_at_with(
     )
 }
 
-/// Compares every pixel whose centre and four neighbours (±1 px) agree on which sheets they hit.
+/// Where the four samples of a 4× multisampled pixel lie, relative to its centre, px: Vulkan's standard
+/// sample locations. A pixel whose samples all see what its centre sees is the one-sample pixel.
+const SAMPLE_OFFSETS: [(f64, f64); 4] = [
+    (-0.125, -0.375),
+    (0.375, -0.125),
+    (-0.375, 0.125),
+    (0.125, 0.375),
+];
+
+/// Compares every pixel whose centre, four neighbours (±1 px) and four samples agree on which sheets
+/// they hit.
 /// `expected(x, y)` gives (rgb, alpha) at a sub-pixel position and `coverage(x, y)` a key of what is hit.
 /// Tolerance per pixel: 1/8 of the largest change of the expected value to a neighbour 1 px away (the
 /// rasteriser snaps vertices to ≤ 1/16 px in Vulkan, moving the interpolated surface point by at most that;
@@ -232,6 +244,7 @@ fn compare_with_slack(
             let offsets = [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)];
             if offsets
                 .iter()
+                .chain(&SAMPLE_OFFSETS)
                 .any(|(dx, dy)| coverage(cx + dx, cy + dy) != key)
             {
                 continue;
@@ -432,6 +445,7 @@ fn background_image_is_composited_pixel_exactly() {
             let inside = hit(cx, cy).is_some();
             if [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
                 .iter()
+                .chain(&SAMPLE_OFFSETS)
                 .any(|(dx, dy)| hit(cx + dx, cy + dy).is_some() != inside)
             {
                 continue;
@@ -1768,4 +1782,105 @@ fn assert_adds_light_and_leaves_the_rest(
         }
         assert!(covered > 300, "{path:?}: {covered}");
     }
+}
+
+/// Four samples per pixel: a pixel inside the sheet or inside the background is the one-sample
+/// pixel (each sample is blended by eq. (9) alone, and the mean of equal samples is that value), while
+/// pixels on the sheet's edge are blends: their transmittance α lies strictly between the sheet's and
+/// the background's 1, which no one-sample pixel does.
+#[test]
+fn four_samples_blend_edges_and_leave_the_rest_as_it_was() {
+    let Some(mut four) = renderer(WIDTH, HEIGHT) else {
+        return;
+    };
+    let mut one = HeadlessRenderer::new(WIDTH, HEIGHT).expect("the same adapter, one sample");
+    assert_eq!(four.samples(), 4);
+    let sheet = Sheet {
+        origin: DVec3::new(-0.6, -0.45, 0.0),
+        u: DVec3::new(1.2, 0.0, 0.3),
+        v: DVec3::new(0.1, 0.9, 0.0),
+        normal: DVec3::new(1.2, 0.0, 0.3)
+            .cross(DVec3::new(0.1, 0.9, 0.0))
+            .normalize(),
+    };
+    let camera = camera(Vec3::new(0.3, 0.2, 1.8));
+    let shading = ShadingParams::uniform(2.0, 0.9, Vec3::new(0.4, 0.5, 1.3), 40.0).unwrap();
+    let background = Background::Uniform([0.3, 0.2, 0.1]);
+    let mesh = sheet.mesh(4);
+    let render = |renderer: &mut HeadlessRenderer| {
+        renderer
+            .render(
+                &mesh,
+                &camera,
+                &shading,
+                &background,
+                EvaluationPath::PerFragment,
+            )
+            .unwrap()
+    };
+    let (single, multi) = (render(&mut one), render(&mut four));
+    // Same format: equal but for the rasteriser's f32 interpolation of the fragment's inputs, which a
+    // multisampled target computes by other operations (measured: 1 ulp; 16 ulps allowed); otherwise
+    // within the coarser format's rounding.
+    let tolerance = if one.target_format() == four.target_format() {
+        16.0 * f32::EPSILON
+    } else {
+        2f32.powi(-10)
+    };
+    let covered = |x: f64, y: f64| {
+        let (origin, direction) = camera.pixel_ray(x, y, WIDTH, HEIGHT).unwrap();
+        sheet.hit(origin, direction).is_some()
+    };
+    let (mut interior, mut edges, mut blended) = (0, 0, 0);
+    let sheet_alpha = single
+        .pixels
+        .iter()
+        .filter(|p| p[3] < 1.0)
+        .map(|p| p[3])
+        .fold(0.0f32, f32::max);
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            let (cx, cy) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+            let corners = [
+                (-0.5, -0.5),
+                (0.5, -0.5),
+                (-0.5, 0.5),
+                (0.5, 0.5),
+                (0.0, 0.0),
+            ]
+            .map(|(dx, dy)| covered(cx + dx, cy + dy));
+            let (s, m) = (single.pixel(x, y).unwrap(), multi.pixel(x, y).unwrap());
+            assert!(
+                s[3] == 1.0 || s[3] <= sheet_alpha,
+                "one sample: pixel ({x}, {y}) is a blend, α = {}",
+                s[3]
+            );
+            if corners.iter().all(|&c| c == corners[0]) {
+                interior += 1;
+                for c in 0..4 {
+                    assert!(
+                        (m[c] - s[c]).abs() <= tolerance * s[c].abs(),
+                        "pixel ({x}, {y}) channel {c}: four samples {} vs one {}",
+                        m[c],
+                        s[c]
+                    );
+                }
+            } else {
+                edges += 1;
+                blended += usize::from(m[3] > sheet_alpha * 1.01 && m[3] < 0.99);
+            }
+        }
+    }
+    assert!(
+        interior > 3000 && edges > 100,
+        "{interior} interior, {edges} edge pixels"
+    );
+    // Most edge pixels are partly covered by the sheet and partly by the background.
+    assert!(
+        blended * 2 > edges,
+        "only {blended} of {edges} edge pixels are blends"
+    );
+    println!(
+        "4× MSAA: {interior} interior pixels as before, {blended} of {edges} edge pixels blended"
+    );
 }

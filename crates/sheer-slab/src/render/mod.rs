@@ -147,6 +147,17 @@ pub enum RenderError {
     /// A wgpu validation or out-of-memory error.
     #[error("GPU error: {0}")]
     Gpu(String),
+    /// Multisampling takes 1 (none) or 4 samples per pixel.
+    #[error("{0} samples per pixel: multisampling takes 1 (off) or 4")]
+    Samples(u32),
+    /// The adapter cannot multisample a float render target.
+    #[error("the adapter {adapter} cannot render a float target with {samples} samples per pixel")]
+    MultisampleUnsupported {
+        /// The adapter.
+        adapter: String,
+        /// Samples asked for.
+        samples: u32,
+    },
     /// Width or height is zero or beyond the device's limit.
     #[error("render size {width}x{height} is not supported (1..={max} per side)")]
     Size {
@@ -388,6 +399,10 @@ pub struct HeadlessRenderer {
     dual_source: bool,
     target: wgpu::Texture,
     target_view: wgpu::TextureView,
+    /// Samples per pixel (1 or 4).
+    samples: u32,
+    /// With more than one sample: the multisampled attachment, resolved into `target`.
+    multisampled: Option<(wgpu::Texture, wgpu::TextureView)>,
     readback: wgpu::Buffer,
     padded_row_bytes: u32,
     uniform: wgpu::Buffer,
@@ -476,6 +491,16 @@ fn backends_from_list(value: &str) -> Result<wgpu::Backends, RenderError> {
 impl HeadlessRenderer {
     /// Finds an adapter (see the module docs), creates a device and a `width × height` linear target.
     pub fn new(width: u32, height: u32) -> Result<Self, RenderError> {
+        Self::with_samples(width, height, 1)
+    }
+
+    /// A renderer of `width × height` pixels that takes `samples` samples per pixel (1, or 4 for
+    /// anti-aliased edges): each sample is blended by eq. (9) on its own and the pixel is their mean, so a
+    /// pixel inside one surface is exactly the one-sample value and a pixel on an edge a blend.
+    pub fn with_samples(width: u32, height: u32, samples: u32) -> Result<Self, RenderError> {
+        if !matches!(samples, 1 | 4) {
+            return Err(RenderError::Samples(samples));
+        }
         let backends = backends_from_env()?;
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
         descriptor.backends = backends;
@@ -497,12 +522,33 @@ impl HeadlessRenderer {
 
         let available = adapter.features();
         let mut required_features = wgpu::Features::empty();
-        let target_format = if available.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        // A format multisamples and resolves if the adapter says so (beyond WebGPU's guarantees only
+        // with adapter-specific format features).
+        let multisamples = |format: wgpu::TextureFormat| {
+            samples == 1
+                || (available.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+                    && {
+                        let flags = adapter.get_texture_format_features(format).flags;
+                        flags.sample_count_supported(samples)
+                            && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE)
+                    })
+        };
+        let target_format = if available.contains(wgpu::Features::FLOAT32_BLENDABLE)
+            && multisamples(wgpu::TextureFormat::Rgba32Float)
+        {
             required_features |= wgpu::Features::FLOAT32_BLENDABLE;
             TargetFormat::Rgba32Float
-        } else {
+        } else if multisamples(wgpu::TextureFormat::Rgba16Float) {
             TargetFormat::Rgba16Float
+        } else {
+            return Err(RenderError::MultisampleUnsupported {
+                adapter: adapter_description,
+                samples,
+            });
         };
+        if samples > 1 {
+            required_features |= wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
+        }
         let dual_source = available.contains(wgpu::Features::DUAL_SOURCE_BLENDING);
         if dual_source {
             required_features |= wgpu::Features::DUAL_SOURCE_BLENDING;
@@ -545,6 +591,25 @@ impl HeadlessRenderer {
             view_formats: &[],
         });
         let target_view = target.create_view(&wgpu::TextureViewDescriptor::default());
+        // The samples, resolved into `target` at the end of each frame's pass.
+        let multisampled = (samples > 1).then(|| {
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("multisampled radiance"),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format: target_wgpu_format(target_format),
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            (texture, view)
+        });
         let bytes_per_pixel = match target_format {
             TargetFormat::Rgba32Float => 16,
             TargetFormat::Rgba16Float => 8,
@@ -687,6 +752,8 @@ impl HeadlessRenderer {
             dual_source,
             target,
             target_view,
+            samples,
+            multisampled,
             readback,
             padded_row_bytes,
             uniform,
@@ -714,6 +781,11 @@ impl HeadlessRenderer {
         };
         renderer.background_pipeline = Some(renderer.create_background_pipeline()?);
         Ok(renderer)
+    }
+
+    /// Samples per pixel: 1, or 4 with anti-aliased edges.
+    pub fn samples(&self) -> u32 {
+        self.samples
     }
 
     /// The adapter in use: name, backend and driver.
@@ -833,9 +905,12 @@ impl HeadlessRenderer {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("slab pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.target_view,
+                    view: self
+                        .multisampled
+                        .as_ref()
+                        .map_or(&self.target_view, |(_, view)| view),
                     depth_slice: None,
-                    resolve_target: None,
+                    resolve_target: self.multisampled.as_ref().map(|_| &self.target_view),
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
                         store: wgpu::StoreOp::Store,
@@ -1685,7 +1760,10 @@ impl HeadlessRenderer {
                     },
                     primitive: wgpu::PrimitiveState::default(),
                     depth_stencil: None,
-                    multisample: wgpu::MultisampleState::default(),
+                    multisample: wgpu::MultisampleState {
+                        count: self.samples,
+                        ..Default::default()
+                    },
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
                         entry_point: Some("fs_background"),
@@ -1774,7 +1852,10 @@ impl HeadlessRenderer {
                         ..Default::default()
                     },
                     depth_stencil: None,
-                    multisample: wgpu::MultisampleState::default(),
+                    multisample: wgpu::MultisampleState {
+                        count: self.samples,
+                        ..Default::default()
+                    },
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
                         entry_point: Some(fragment_entry),
