@@ -386,6 +386,9 @@ pub struct FrameRenderer {
     renderer: HeadlessRenderer,
     shading: ShadingParams,
     background: Background,
+    /// The scene section `shading.sky` was made from: an environment image is decoded and projected
+    /// again only when the section changes.
+    environment: scene::EnvironmentSection,
 }
 
 impl FrameRenderer {
@@ -451,6 +454,7 @@ impl FrameRenderer {
             renderer,
             shading,
             background,
+            environment: scene.environment.clone(),
         })
     }
 
@@ -474,9 +478,12 @@ impl FrameRenderer {
         };
         shading.scattering = scattering(scene)?;
         shading.all_orders_sampling = all_orders_sampling(scene);
-        shading.sky = sky_light(scene)?;
+        if scene.environment != self.environment {
+            shading.sky = sky_light(scene)?;
+        }
         validate_shading(&shading, scene)?;
         self.shading = shading;
+        self.environment = scene.environment.clone();
         Ok(())
     }
 

@@ -284,6 +284,50 @@ fn compare_with_slack(
     result
 }
 
+/// The error bound of linear interpolation over the triangles of a sheet of `segments` × `segments`
+/// quads, for the per-channel value `composite(s, t)` at sheet coordinates (s, t) ∈ [0, 1]²: (h²/8)·|f''|
+/// per direction, with second differences at the vertex spacing h estimating h²·f'' along u, v and the
+/// diagonal; their largest sum / 8, times 2 for safety.
+fn interpolation_bound(segments: u32, composite: impl Fn(f64, f64) -> [f64; 3]) -> f64 {
+    let second_difference = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+        (0..3)
+            .map(|k| (a[k] - 2.0 * b[k] + c[k]).abs())
+            .fold(0.0, f64::max)
+    };
+    let h = 1.0 / f64::from(segments);
+    let mut curvature: f64 = 0.0;
+    for i in 1..segments {
+        for j in 1..segments {
+            let (s, t) = (f64::from(i) * h, f64::from(j) * h);
+            let centre = composite(s, t);
+            let along_u = second_difference(composite(s + h, t), centre, composite(s - h, t));
+            let along_v = second_difference(composite(s, t + h), centre, composite(s, t - h));
+            let diagonal =
+                second_difference(composite(s + h, t + h), centre, composite(s - h, t - h));
+            curvature = curvature.max(along_u + along_v + diagonal);
+        }
+    }
+    2.0 * curvature / 8.0
+}
+
+/// A 1.2 m × 0.9 m sheet of 6 × 6 quads facing +z, seen from the front over a grey background.
+fn front_sheet_scene() -> (SlabMesh, Camera, Background) {
+    let mesh = SlabMesh::flat_sheet(
+        Vec3::new(-0.6, -0.45, 0.0),
+        Vec3::X * 1.2,
+        Vec3::Y * 0.9,
+        Vec3::Z,
+        6,
+        6,
+    )
+    .unwrap();
+    (
+        mesh,
+        camera(Vec3::new(0.3, 0.2, 1.8)),
+        Background::Uniform([0.3, 0.3, 0.3]),
+    )
+}
+
 fn camera(eye: Vec3) -> Camera {
     Camera {
         eye,
@@ -725,25 +769,7 @@ fn per_vertex_and_cpu_paths_agree_with_per_fragment_on_a_fine_sheet() {
             let albedo = f64::from(0.85f32);
             [0, 1, 2].map(|c| f64::from(background_radiance[c]) * alpha[c] + albedo * radiance[c])
         };
-        let second_difference = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
-            (0..3)
-                .map(|k| (a[k] - 2.0 * b[k] + c[k]).abs())
-                .fold(0.0, f64::max)
-        };
-        let h = 1.0 / f64::from(segments);
-        let mut curvature: f64 = 0.0;
-        for i in 1..segments {
-            for j in 1..segments {
-                let (s, t) = (f64::from(i) * h, f64::from(j) * h);
-                let centre = composite(s, t);
-                let along_u = second_difference(composite(s + h, t), centre, composite(s - h, t));
-                let along_v = second_difference(composite(s, t + h), centre, composite(s, t - h));
-                let diagonal =
-                    second_difference(composite(s + h, t + h), centre, composite(s - h, t - h));
-                curvature = curvature.max(along_u + along_v + diagonal);
-            }
-        }
-        let interpolation_tolerance = 2.0 * curvature / 8.0;
+        let interpolation_tolerance = interpolation_bound(segments, composite);
         let mut worst_vertex: f64 = 0.0;
         let mut worst_cpu_vs_vertex: f64 = 0.0;
         let mut compared = 0;
@@ -1242,17 +1268,7 @@ fn single_scattering_renders_the_same_after_all_orders_frames() {
     let Some(mut renderer) = renderer(WIDTH, HEIGHT) else {
         return;
     };
-    let mesh = SlabMesh::flat_sheet(
-        Vec3::new(-0.6, -0.45, 0.0),
-        Vec3::X * 1.2,
-        Vec3::Y * 0.9,
-        Vec3::Z,
-        6,
-        6,
-    )
-    .unwrap();
-    let camera = camera(Vec3::new(0.3, 0.2, 1.8));
-    let background = Background::Uniform([0.3, 0.3, 0.3]);
+    let (mesh, camera, background) = front_sheet_scene();
     let single = ShadingParams::uniform(2.0, 0.9, Vec3::new(0.4, 0.5, 1.3), 40.0).unwrap();
     let all = ShadingParams {
         scattering: all_orders(),
@@ -1660,29 +1676,7 @@ fn sky_light_matches_the_cpu_model_on_every_path() {
                 .unwrap();
                 [0, 1, 2].map(|c| f64::from(background[c]) * alpha[c] + albedo[c] * radiance[c])
             };
-            let second_difference = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
-                (0..3)
-                    .map(|k| (a[k] - 2.0 * b[k] + c[k]).abs())
-                    .fold(0.0, f64::max)
-            };
-            let h = 1.0 / f64::from(segments);
-            let mut curvature: f64 = 0.0;
-            for i in 1..segments {
-                for j in 1..segments {
-                    let (s, t) = (f64::from(i) * h, f64::from(j) * h);
-                    let centre = composite(s, t);
-                    curvature = curvature.max(
-                        second_difference(composite(s + h, t), centre, composite(s - h, t))
-                            + second_difference(composite(s, t + h), centre, composite(s, t - h))
-                            + second_difference(
-                                composite(s + h, t + h),
-                                centre,
-                                composite(s - h, t - h),
-                            ),
-                    );
-                }
-            }
-            let bound = 2.0 * curvature / 8.0;
+            let bound = interpolation_bound(segments, composite);
             for (index, ((f, v), c)) in fragment
                 .pixels
                 .iter()
@@ -1720,17 +1714,7 @@ fn sky_light_only_adds_light_and_off_changes_nothing() {
     let Some(mut renderer) = renderer(WIDTH, HEIGHT) else {
         return;
     };
-    let mesh = SlabMesh::flat_sheet(
-        Vec3::new(-0.6, -0.45, 0.0),
-        Vec3::X * 1.2,
-        Vec3::Y * 0.9,
-        Vec3::Z,
-        6,
-        6,
-    )
-    .unwrap();
-    let camera = camera(Vec3::new(0.3, 0.2, 1.8));
-    let background = Background::Uniform([0.3, 0.3, 0.3]);
+    let (mesh, camera, background) = front_sheet_scene();
     let plain = ShadingParams::uniform(2.0, 0.9, Vec3::new(-0.4, 0.5, -1.3), 40.0).unwrap();
     let sky = ShadingParams {
         sky: Some(daylight()),

@@ -1426,12 +1426,7 @@ impl HeadlessRenderer {
 
     /// Uploads the all-orders table unless it is the one already on the GPU.
     fn update_table(&mut self, table: &Arc<AllOrdersTable>) -> Result<(), RenderError> {
-        if self
-            .table
-            .source
-            .as_ref()
-            .is_some_and(|uploaded| Arc::ptr_eq(uploaded, table) || uploaded == table)
-        {
+        if is_uploaded(self.table.source.as_ref(), table) {
             return Ok(());
         }
         let spec = table.spec();
@@ -1509,12 +1504,7 @@ impl HeadlessRenderer {
     /// (ln(R_d/Λ) at μ nodes j and j + 1, ln(T_d/Λ) at the same nodes) of τ1 node t, albedo node a; the
     /// stored layout is [face][tau][albedo][mu].
     fn update_diffuse(&mut self, table: &Arc<DiffuseTable>) -> Result<(), RenderError> {
-        if self
-            .diffuse
-            .source
-            .as_ref()
-            .is_some_and(|uploaded| Arc::ptr_eq(uploaded, table) || uploaded == table)
-        {
+        if is_uploaded(self.diffuse.source.as_ref(), table) {
             return Ok(());
         }
         let spec = table.spec();
@@ -1887,6 +1877,11 @@ impl std::fmt::Debug for HeadlessRenderer {
             .field("dual_source", &self.dual_source)
             .finish_non_exhaustive()
     }
+}
+
+/// Whether `table` is the one `uploaded` to the GPU: the same `Arc`, or an equal table.
+fn is_uploaded<T: PartialEq>(uploaded: Option<&Arc<T>>, table: &Arc<T>) -> bool {
+    uploaded.is_some_and(|uploaded| Arc::ptr_eq(uploaded, table) || uploaded == table)
 }
 
 /// An `Rgba32Float` texture of `width × height` texels holding `data` (four floats a texel), and its view.
