@@ -14,6 +14,6 @@ struct SlabOutput {
 // radiance: L_source (W/(m²·sr)); transmittance: α_source per channel.
 fn slab_output(radiance: vec3<f32>, transmittance: vec3<f32>) -> SlabOutput {
     let mean = (transmittance.r + transmittance.g + transmittance.b) / 3.0;
-    return SlabOutput(vec4<f32>(radiance, 1.0), vec4<f32>(transmittance, mean));
+    return SlabOutput(vec4<f32>(radiance * frame.output.z, 1.0), vec4<f32>(transmittance, mean));
 }
 

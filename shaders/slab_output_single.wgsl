@@ -9,6 +9,6 @@ struct SlabOutput {
 
 // radiance: L_source (W/(m²·sr)); transmittance: α_source (grey, so its red channel is used).
 fn slab_output(radiance: vec3<f32>, transmittance: vec3<f32>) -> SlabOutput {
-    return SlabOutput(vec4<f32>(radiance, transmittance.r));
+    return SlabOutput(vec4<f32>(radiance * frame.output.z, transmittance.r));
 }
 

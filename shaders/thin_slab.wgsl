@@ -9,7 +9,7 @@
 // must come first), then `lit_side.wgsl` (the lit-side rule: `LitSide`, `lit_side_cosines`).
 //
 // Units: positions in m, light flux in W, irradiance in W/m², radiance in W/(m²·sr). All radiance here is
-// linear; exposure and sRGB encoding happen after read-back.
+// linear; a display target gets it times the exposure (`frame.output.z`), a radiance target as it is.
 //
 // Blending (fixed-function, eq. 9): L_blended = L_dst · α_src + L_src, i.e. colour source factor One and
 // destination factor SrcAlpha (grey τ1) or Src1 (per-channel τ1 with dual-source blending).
@@ -33,6 +33,11 @@ struct Frame {
     // Sky light (crates/sheer-slab/src/sky.rs): rgb of the nine spherical-harmonic coefficients of E/π, the
     // environment's irradiance over π (W/(m²·sr)), in the order of `spherical_harmonics`.
     sky: array<vec4<f32>, 9>,
+    // x, y: the target's size (pixels); z: output scale (1 for a radiance target, the exposure for a display
+    // target); w: the light marker's radius (pixels).
+    output: vec4<f32>,
+    // rgb: the light marker's radiance (W/(m²·sr)).
+    marker: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -574,7 +579,70 @@ fn vs_background(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f
 fn fs_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
     if frame.background.w > 0.5 {
         // Alpha 1: the target's alpha channel accumulates the product of α over the layers drawn on top.
-        return vec4<f32>(textureLoad(background_texture, vec2<i32>(pixel.xy), 0).rgb, 1.0);
+        return vec4<f32>(textureLoad(background_texture, vec2<i32>(pixel.xy), 0).rgb * frame.output.z, 1.0);
     }
-    return vec4<f32>(frame.background.rgb, 1.0);
+    return vec4<f32>(frame.background.rgb * frame.output.z, 1.0);
+}
+
+// ---- opaque surfaces (a flag pole): Lambertian, lit by the point light and the sky --------------------
+// Drawn after the background and before the cloth; with a depth attachment they write depth, so cloth behind
+// them is hidden and cloth in front blends over them by eq. (9). Alpha 0: nothing behind them is seen.
+
+struct OpaqueInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec3<f32>,
+}
+
+struct OpaqueVarying {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec3<f32>,
+}
+
+@vertex
+fn vs_opaque(input: OpaqueInput) -> OpaqueVarying {
+    return OpaqueVarying(frame.view_projection * vec4<f32>(input.position, 1.0), input.position,
+        input.normal, input.albedo);
+}
+
+@fragment
+fn fs_opaque(input: OpaqueVarying) -> @location(0) vec4<f32> {
+    let n = normalize(input.normal);
+    let to_light = frame.light.xyz - input.world_position;
+    let r2 = dot(to_light, to_light);
+    // E = Φ/(4πr²)·max(n·ω, 0) (W/m²), Lambertian L = ρE/π; the sky adds ρ·E_sky(n)/π (zero without sky).
+    let irradiance = frame.light.w / (4.0 * PI * r2) * max(dot(n, to_light * inverseSqrt(r2)), 0.0);
+    let radiance = input.albedo * (irradiance / PI + sky_radiance_on_face(n));
+    return vec4<f32>(radiance * frame.output.z, 0.0);
+}
+
+// ---- the light marker: a disc of constant radiance with a black rim, at the light's depth ---------------
+
+struct MarkerVarying {
+    @builtin(position) clip_position: vec4<f32>,
+    // Offset from the disc's centre, pixels.
+    @location(0) offset: vec2<f32>,
+}
+
+// A quad (triangle strip, 4 vertices) around the light, sized in pixels: radius plus a 2-pixel rim.
+@vertex
+fn vs_marker(@builtin(vertex_index) index: u32) -> MarkerVarying {
+    let corner = vec2<f32>(f32(index & 1u) * 2.0 - 1.0, f32(index >> 1u) * 2.0 - 1.0);
+    let centre = frame.view_projection * vec4<f32>(frame.light.xyz, 1.0);
+    let offset = corner * (frame.output.w + 2.0);
+    // Normalised device coordinates span 2 over the target's pixels.
+    let clip = centre + vec4<f32>(offset * 2.0 / frame.output.xy * centre.w, 0.0, 0.0);
+    return MarkerVarying(clip, offset);
+}
+
+@fragment
+fn fs_marker(input: MarkerVarying) -> @location(0) vec4<f32> {
+    let d = length(input.offset);
+    if d > frame.output.w + 1.5 {
+        discard;
+    }
+    let radiance = select(vec3<f32>(0.0), frame.marker.rgb, d <= frame.output.w);
+    return vec4<f32>(radiance * frame.output.z, 0.0);
 }

@@ -12,8 +12,8 @@ use std::sync::{Arc, OnceLock};
 
 use sheer_slab::render::ShadingError;
 use sheer_slab::render::{
-    Background, Camera, EvaluationPath, HeadlessRenderer, LinearImage, ShadingParams, SlabMesh,
-    Texture2d, srgb8_to_linear,
+    Background, Camera, EvaluationPath, HeadlessRenderer, LightMarker, LinearImage, OpaqueMesh,
+    ShadingParams, SlabFrame, SlabMesh, Texture2d, srgb8_to_linear,
 };
 use sheer_slab::{
     AllOrdersTable, DiffuseEnvironment, DiffuseTable, IrradianceConvention, SkyLight,
@@ -381,22 +381,23 @@ fn validate_shading(shading: &ShadingParams, scene: &Scene) -> Result<(), CliErr
     })
 }
 
-/// The GPU side: renderer, textures and the scene's shading parameters.
-pub struct FrameRenderer {
-    renderer: HeadlessRenderer,
+/// The scene's inputs to the renderer, shared by the command line and the window: material, sky and
+/// background, the camera, the flag pole and the light's marker.
+pub struct FrameShading {
     shading: ShadingParams,
     background: Background,
     /// The scene section `shading.sky` was made from: an environment image is decoded and projected
     /// again only when the section changes.
     environment: scene::EnvironmentSection,
+    size: (u32, u32),
+    camera: Camera,
+    pole: Vec<OpaqueMesh>,
 }
 
-impl FrameRenderer {
-    /// Finds an adapter (Mesa lavapipe or llvmpipe without a GPU) and loads the scene's textures.
-    pub fn new(scene: &Scene) -> Result<FrameRenderer, CliError> {
+impl FrameShading {
+    /// Loads the scene's textures and tables.
+    pub fn new(scene: &Scene) -> Result<FrameShading, CliError> {
         let (width, height) = (scene.render.width, scene.render.height);
-        let renderer = HeadlessRenderer::with_samples(width, height, scene.render.samples)
-            .map_err(|e| CliError::new(format!("renderer: {e}")))?;
         let albedo_texture = match (&scene.static_sheet, &scene.shading.albedo_texture) {
             (Some(sheet), _) => {
                 let [r, g, b] = sheet.albedo;
@@ -450,22 +451,19 @@ impl FrameRenderer {
             sky: sky_light(scene)?,
         };
         validate_shading(&shading, scene)?;
-        Ok(FrameRenderer {
-            renderer,
+        Ok(FrameShading {
             shading,
             background,
             environment: scene.environment.clone(),
+            size: (width, height),
+            camera: camera(scene),
+            pole: Vec::new(),
         })
     }
 
-    /// Which GPU adapter renders.
-    pub fn adapter(&self) -> &str {
-        self.renderer.adapter_description()
-    }
-
     /// Updates the material parameters from the scene (τ1, Λ scale, flux, convention, scattering
-    /// model, exposure, α).
-    pub fn update_shading(&mut self, scene: &Scene) -> Result<(), CliError> {
+    /// model, exposure, α, sky).
+    pub fn update(&mut self, scene: &Scene) -> Result<(), CliError> {
         let mut shading = self.shading.clone();
         shading.optical_thickness = scene.shading.optical_thickness;
         shading.albedo_scale = scene.shading.albedo_scale;
@@ -491,65 +489,95 @@ impl FrameRenderer {
         self.shading.exposure
     }
 
-    /// Renders the flag as the scene's shading model says, and draws the light marker.
-    pub fn render(
-        &mut self,
-        flag: &FlagScene,
-        times: &mut StageTimes,
-    ) -> Result<LinearImage, CliError> {
+    /// The image size, pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// What the renderer draws for the flag as it is now: one frame, or for the split view the thin
+    /// slab with the baseline over its left half. The pole and the marker are geometry of each frame.
+    pub fn frames<'a>(&'a mut self, flag: &'a FlagScene) -> Result<Vec<SlabFrame<'a>>, CliError> {
         let scene = &flag.scene;
+        self.shading.light_position = flag.light_position();
+        self.camera = camera(scene);
+        self.pole.clear();
+        if scene.static_sheet.is_none() {
+            self.pole.push(pole(scene)?);
+        }
+        let (width, height) = self.size;
+        let light_marker = scene.light.marker.then(|| LightMarker {
+            radius_pixels: (width.min(height) as f32 / 100.0).max(3.0),
+            radiance: MARKER_RADIANCE,
+        });
         let thin_slab = match scene.shading.path {
             EvaluationPathName::Fragment => EvaluationPath::PerFragment,
             EvaluationPathName::Vertex => EvaluationPath::PerVertex,
             EvaluationPathName::Cpu => EvaluationPath::Cpu,
         };
-        let mut image = match scene.shading.model {
-            ShadingModel::ThinSlab => self.render_path(flag, thin_slab, times)?,
-            ShadingModel::Baseline => self.render_path(flag, EvaluationPath::Baseline, times)?,
-            ShadingModel::Split => {
-                let left = self.render_path(flag, EvaluationPath::Baseline, times)?;
-                let mut right = self.render_path(flag, thin_slab, times)?;
-                let half = right.width / 2;
-                for y in 0..right.height {
-                    for x in 0..half {
-                        let i = (y * right.width + x) as usize;
-                        right.pixels[i] = left.pixels[i];
-                    }
-                }
-                right
-            }
+        let this = &*self;
+        let frame = |path, scissor| SlabFrame {
+            mesh: &flag.mesh,
+            camera: &this.camera,
+            shading: &this.shading,
+            background: &this.background,
+            path,
+            opaque: &this.pole,
+            light_marker,
+            scissor,
         };
-        if scene.static_sheet.is_none() {
-            draw_pole(&mut image, scene, flag.light_position());
-        }
-        if scene.light.marker {
-            let camera = camera(scene);
-            let light = flag.light_position();
-            // Behind the cloth the marker is seen through it, as the background is (eq. 9).
-            let seen_through =
-                segment_crosses_mesh(camera.eye, light, &flag.mesh).then_some(&self.background);
-            draw_light_marker(&mut image, &camera, light, seen_through);
-        }
-        Ok(image)
+        Ok(match scene.shading.model {
+            ShadingModel::ThinSlab => vec![frame(thin_slab, None)],
+            ShadingModel::Baseline => vec![frame(EvaluationPath::Baseline, None)],
+            ShadingModel::Split => vec![
+                frame(thin_slab, None),
+                frame(EvaluationPath::Baseline, Some([0, 0, width / 2, height])),
+            ],
+        })
+    }
+}
+
+/// The command line's renderer: a headless device around the shared frame description.
+pub struct FrameRenderer {
+    renderer: HeadlessRenderer,
+    shading: FrameShading,
+}
+
+impl FrameRenderer {
+    /// Finds an adapter (Mesa lavapipe or llvmpipe without a GPU) and loads the scene's textures.
+    pub fn new(scene: &Scene) -> Result<FrameRenderer, CliError> {
+        let shading = FrameShading::new(scene)?;
+        let (width, height) = shading.size();
+        let renderer = HeadlessRenderer::with_samples(width, height, scene.render.samples)
+            .map_err(|e| CliError::new(format!("renderer: {e}")))?;
+        Ok(FrameRenderer { renderer, shading })
     }
 
-    fn render_path(
+    /// Which GPU adapter renders.
+    pub fn adapter(&self) -> &str {
+        self.renderer.adapter_description()
+    }
+
+    /// See [`FrameShading::update`].
+    pub fn update_shading(&mut self, scene: &Scene) -> Result<(), CliError> {
+        self.shading.update(scene)
+    }
+
+    pub fn exposure(&self) -> f32 {
+        self.shading.exposure()
+    }
+
+    /// Renders the flag as the scene's shading model says, with the pole and the light marker, and
+    /// reads the image back.
+    pub fn render(
         &mut self,
         flag: &FlagScene,
-        path: EvaluationPath,
         times: &mut StageTimes,
     ) -> Result<LinearImage, CliError> {
-        self.shading.light_position = flag.light_position();
         let start = Instant::now();
+        let frames = self.shading.frames(flag)?;
         let gpu = self
             .renderer
-            .render_frame_timed(
-                &flag.mesh,
-                &camera(&flag.scene),
-                &self.shading,
-                &self.background,
-                path,
-            )
+            .render_frames_timed(&frames)
             .map_err(|e| CliError::new(format!("render: {e}")))?;
         times.shading += start.elapsed();
         times.gpu += gpu;
@@ -578,12 +606,12 @@ pub fn camera(scene: &Scene) -> Camera {
 /// Radius of the flag pole, m.
 const POLE_RADIUS: f32 = 0.015;
 
-/// The flag pole along the hoist edge: an opaque, diffuse (albedo 0.5) vertical cylinder lit by the
-/// point light, drawn over the frame like the light marker — the flag is attached to it, so it is
-/// never far behind the cloth it would hide.
-fn draw_pole(image: &mut LinearImage, scene: &Scene, light: Vec3) {
-    let cam = camera(scene);
-    let view_projection = cam.view_projection(image.width, image.height);
+/// The pole's diffuse albedo: a pale wood.
+const POLE_ALBEDO: [f32; 3] = [0.45, 0.4, 0.325];
+
+/// The flag pole along the hoist edge: an opaque, diffuse vertical cylinder from 6 cm above the hoist
+/// to 1.5 m below the flag's foot, lit by the point light and the sky like everything else.
+fn pole(scene: &Scene) -> Result<OpaqueMesh, CliError> {
     let origin = Vec3::new(
         scene.flag.origin.x as f32,
         scene.flag.origin.y as f32,
@@ -591,195 +619,9 @@ fn draw_pole(image: &mut LinearImage, scene: &Scene, light: Vec3) {
     );
     let top = origin + Vec3::new(0.0, 0.06, 0.0);
     let bottom = origin - Vec3::new(0.0, scene.flag.height as f32 + 1.5, 0.0);
-    let to_pixels = |p: Vec3| {
-        let clip = view_projection * p.extend(1.0);
-        (clip.w > 0.0).then(|| {
-            let ndc = clip.truncate() / clip.w;
-            glam::Vec2::new(
-                (ndc.x + 1.0) * 0.5 * image.width as f32,
-                (1.0 - ndc.y) * 0.5 * image.height as f32,
-            )
-        })
-    };
-    let (Some(a), Some(b)) = (to_pixels(top), to_pixels(bottom)) else {
-        return;
-    };
-    // Pixel half-width from the radius seen at the pole's distance (the top's, a fine approximation).
-    let side = (top - cam.eye).cross(Vec3::Y).normalize_or_zero() * POLE_RADIUS;
-    let half_width = to_pixels(top + side)
-        .map_or(1.0, |p| p.distance(a))
-        .max(1.0);
-    let axis = b - a;
-    let length_squared = axis.length_squared().max(1e-6);
-    let across = (top - cam.eye).cross(Vec3::Y).normalize_or_zero();
-    // Horizontal, from the pole toward the camera: `across` × up (up × `across` would face away,
-    // lighting the pole from behind).
-    let towards_eye = across.cross(Vec3::Y);
-    let irradiance = |point: Vec3, normal: Vec3| {
-        let d = light - point;
-        let r2 = d.length_squared().max(1e-6);
-        scene.light.flux / (4.0 * std::f32::consts::PI * r2) * normal.dot(d / r2.sqrt()).max(0.0)
-    };
-    let (x0, x1) = (
-        a.x.min(b.x) - half_width - 1.0,
-        a.x.max(b.x) + half_width + 1.0,
-    );
-    let (y0, y1) = (a.y.min(b.y).max(0.0), a.y.max(b.y));
-    for y in (y0 as u32)..(y1.min(image.height as f32) as u32) {
-        for x in (x0.max(0.0) as u32)..(x1.min(image.width as f32) as u32) {
-            let p = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            let t = ((p - a).dot(axis) / length_squared).clamp(0.0, 1.0);
-            let offset = (p - (a + t * axis)).perp_dot(axis.normalize_or_zero());
-            let u = offset / half_width; // −1 … 1 across the pole
-            if u.abs() > 1.0 {
-                continue;
-            }
-            let normal = (u * across + (1.0 - u * u).sqrt() * towards_eye).normalize_or_zero();
-            let point = top.lerp(bottom, t) + POLE_RADIUS * normal;
-            // Lambertian, albedo 0.5: L = ρ E / π, plus a little sky so its shadow side is not void.
-            let radiance = 0.5 * irradiance(point, normal) / std::f32::consts::PI + 0.02;
-            let i = (y * image.width + x) as usize;
-            image.pixels[i] = [radiance * 0.9, radiance * 0.8, radiance * 0.65, 0.0];
-        }
-    }
+    OpaqueMesh::cylinder(bottom, top, POLE_RADIUS, 24, POLE_ALBEDO)
+        .map_err(|e| CliError::new(format!("flag pole: {e}")))
 }
 
 /// The marker's disc, linear W/(m²·sr): a warm white well above the flag's radiance.
 const MARKER_RADIANCE: [f32; 3] = [4.0, 3.6, 2.4];
-
-/// Whether the segment from `from` to `to` passes through a triangle of `mesh` (Möller & Trumbore
-/// 1997, "Fast, minimum storage ray–triangle intersection"); degenerate triangles are missed.
-fn segment_crosses_mesh(from: Vec3, to: Vec3, mesh: &SlabMesh) -> bool {
-    let direction = to - from;
-    mesh.indices.chunks_exact(3).any(|triangle| {
-        let [a, b, c] = [0, 1, 2].map(|k| Vec3::from_array(mesh.positions[triangle[k] as usize]));
-        let (edge1, edge2) = (b - a, c - a);
-        let p = direction.cross(edge2);
-        let determinant = edge1.dot(p);
-        if determinant.abs() < 1e-12 {
-            return false; // parallel to the triangle's plane, or a degenerate triangle
-        }
-        let inverse = 1.0 / determinant;
-        let offset = from - a;
-        let u = offset.dot(p) * inverse;
-        let q = offset.cross(edge1);
-        let v = direction.dot(q) * inverse;
-        let t = edge2.dot(q) * inverse;
-        u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0
-    })
-}
-
-/// A small bright disc with a black rim where the light is (it marks the light, it does not model
-/// it). Drawn over the frame, or, when `seen_through` gives the background because the cloth lies
-/// between the eye and the light, behind the cloth: in each pixel the marker takes the background's
-/// place under the layers' transmittance α (alpha channel), `L = L_cloth + α·L_marker` with
-/// `L_cloth = L − α·L_background` (eq. 9), so the light shows through thin fabric as it should.
-fn draw_light_marker(
-    image: &mut LinearImage,
-    camera: &Camera,
-    light: Vec3,
-    seen_through: Option<&Background>,
-) {
-    let clip = camera.view_projection(image.width, image.height) * light.extend(1.0);
-    if clip.w <= 0.0 {
-        return; // behind the camera
-    }
-    let ndc = clip.truncate() / clip.w;
-    let cx = (ndc.x + 1.0) * 0.5 * image.width as f32;
-    let cy = (1.0 - ndc.y) * 0.5 * image.height as f32;
-    let radius = (image.width.min(image.height) as f32 / 100.0).max(3.0);
-    let (x0, x1) = ((cx - radius).floor().max(0.0), (cx + radius).ceil());
-    let (y0, y1) = ((cy - radius).floor().max(0.0), (cy + radius).ceil());
-    for y in (y0 as u32)..(y1.min(image.height as f32) as u32) {
-        for x in (x0 as u32)..(x1.min(image.width as f32) as u32) {
-            let d = ((x as f32 + 0.5 - cx).powi(2) + (y as f32 + 0.5 - cy).powi(2)).sqrt();
-            let i = (y * image.width + x) as usize;
-            let marker = if d <= radius {
-                MARKER_RADIANCE
-            } else if d <= radius + 1.5 {
-                [0.0; 3]
-            } else {
-                continue;
-            };
-            let pixel = &mut image.pixels[i];
-            let alpha = pixel[3];
-            for channel in 0..3 {
-                pixel[channel] = match seen_through {
-                    None => marker[channel],
-                    Some(background) => {
-                        let behind = match background {
-                            Background::Uniform(colour) => colour[channel],
-                            Background::Image(texture) => texture.texels()[i][channel],
-                        };
-                        // max(): L − α·L_background is the cloth's own radiance, ≥ 0 but for rounding.
-                        (pixel[channel] - alpha * behind).max(0.0) + alpha * marker[channel]
-                    }
-                };
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A 1 m sheet in the plane z = 0 around the origin, 4 × 4 cells.
-    fn sheet() -> SlabMesh {
-        SlabMesh::flat_sheet(Vec3::new(-0.5, -0.5, 0.0), Vec3::X, Vec3::Y, Vec3::Z, 4, 4).unwrap()
-    }
-
-    #[test]
-    fn a_segment_through_the_sheet_crosses_it_and_one_that_stops_short_does_not() {
-        let mesh = sheet();
-        let eye = Vec3::new(0.1, 0.2, 3.0);
-        assert!(segment_crosses_mesh(eye, Vec3::new(0.1, 0.2, -1.0), &mesh));
-        assert!(!segment_crosses_mesh(eye, Vec3::new(0.1, 0.2, 0.5), &mesh));
-        // Beside the sheet, and parallel to it.
-        assert!(!segment_crosses_mesh(eye, Vec3::new(2.0, 0.2, -1.0), &mesh));
-        assert!(!segment_crosses_mesh(
-            Vec3::new(-1.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            &mesh
-        ));
-    }
-
-    /// The marker's centre pixel after drawing it over a uniform image of cloth radiance 0.3 with
-    /// transmittance α = 0.25 over a background of 0.2, light straight ahead of the camera.
-    fn marker_centre(seen_through: Option<&Background>) -> [f32; 4] {
-        let (width, height) = (64, 48);
-        let mut image = LinearImage {
-            width,
-            height,
-            pixels: vec![[0.3, 0.3, 0.3, 0.25]; (width * height) as usize],
-        };
-        let camera = Camera {
-            eye: Vec3::new(0.0, 0.0, 3.0),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            vertical_fov: 0.5,
-            near: 0.05,
-            far: 100.0,
-        };
-        draw_light_marker(&mut image, &camera, Vec3::ZERO, seen_through);
-        image.pixels[(height / 2 * width + width / 2) as usize]
-    }
-
-    #[test]
-    fn the_marker_is_drawn_over_the_frame_or_seen_through_the_cloth() {
-        // In front: the marker replaces the pixel's radiance; α is kept.
-        let front = marker_centre(None);
-        assert_eq!(front, [4.0, 3.6, 2.4, 0.25]);
-        // Behind: it takes the background's place under α (eq. 9): (0.3 − 0.25·0.2) + 0.25·L_marker.
-        let behind = marker_centre(Some(&Background::Uniform([0.2; 3])));
-        for (channel, marker) in MARKER_RADIANCE.iter().enumerate() {
-            let expected = (0.3 - 0.25 * 0.2) + 0.25 * marker;
-            assert!(
-                (behind[channel] - expected).abs() < 1e-6,
-                "channel {channel}: {} vs {expected}",
-                behind[channel]
-            );
-        }
-        assert_eq!(behind[3], 0.25);
-    }
-}

@@ -16,6 +16,7 @@ mod sequence;
 mod simulate;
 mod slab_cmd;
 mod window;
+mod window_image;
 
 use std::process::ExitCode;
 
@@ -55,6 +56,8 @@ impl CliError {
         }
     }
 }
+
+impl std::error::Error for CliError {}
 
 impl std::fmt::Display for CliError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

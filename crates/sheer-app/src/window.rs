@@ -8,13 +8,15 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use eframe::egui;
+use eframe::wgpu;
 use sheer_cloth::Method;
 
 use crate::CliError;
-use crate::frame::{FlagScene, FrameRenderer, StageTimes};
+use crate::frame::{FlagScene, FrameShading, StageTimes};
 use crate::scene::{
     AllOrdersLookup, EvaluationPathName, Scattering, Scene, ShadingModel, ShadingSection,
 };
+use crate::window_image::{WindowImage, wanted_features};
 
 /// Options of the window from the command line.
 #[derive(Debug, Clone, Default)]
@@ -291,8 +293,7 @@ impl Fields {
 
 pub struct SheerApp {
     flag: FlagScene,
-    renderer: FrameRenderer,
-    texture: Option<egui::TextureHandle>,
+    renderer: WindowImage,
     fields: Fields,
     paused: bool,
     step_once: bool,
@@ -304,6 +305,8 @@ pub struct SheerApp {
     options: WindowOptions,
     screenshot_requested: bool,
     screenshot_done: Arc<Mutex<Option<Result<PathBuf, String>>>>,
+    /// Scripted mode (`--frames`): every frame's time, for the line [`run`] prints at exit.
+    frame_times: Arc<Mutex<FrameTimes>>,
     /// Scripted mode (`--frames`): the first error, which closes the window and fails [`run`].
     script_failure: Arc<Mutex<Option<String>>>,
     // Camera orbit about its target: azimuth and elevation (rad) and distance (m).
@@ -322,7 +325,7 @@ fn orbit_of(scene: &Scene) -> (f32, f32, f32) {
 
 impl SheerApp {
     pub fn new(scene: Scene, options: WindowOptions) -> Result<SheerApp, CliError> {
-        let renderer = FrameRenderer::new(&scene)?;
+        let renderer = WindowImage::new(FrameShading::new(&scene)?);
         let mut flag = FlagScene::new(scene.clone())?;
         crate::sequence::advance_to(&mut flag, f64::from(scene.render.warmup))?;
         let orbit = orbit_of(&scene);
@@ -361,7 +364,6 @@ impl SheerApp {
         Ok(SheerApp {
             flag,
             renderer,
-            texture: None,
             fields,
             paused: false,
             step_once: false,
@@ -373,6 +375,7 @@ impl SheerApp {
             options,
             screenshot_requested: false,
             screenshot_done: Arc::new(Mutex::new(None)),
+            frame_times: Arc::new(Mutex::new(FrameTimes::default())),
             script_failure: Arc::new(Mutex::new(None)),
             orbit,
             image_area: egui::Vec2::ZERO,
@@ -426,22 +429,8 @@ impl SheerApp {
                 }
             }
         }
-        match self.renderer.render(&self.flag, &mut times) {
-            Ok(image) => {
-                let bytes = image.to_srgb8(self.renderer.exposure());
-                let colour = egui::ColorImage::from_rgba_unmultiplied(
-                    [image.width as usize, image.height as usize],
-                    &bytes,
-                );
-                match &mut self.texture {
-                    Some(texture) => texture.set(colour, egui::TextureOptions::LINEAR),
-                    None => {
-                        self.texture =
-                            Some(ctx.load_texture("frame", colour, egui::TextureOptions::LINEAR))
-                    }
-                }
-            }
-            Err(error) => self.report_error(ctx, error.to_string()),
+        if let Err(error) = self.renderer.render(&self.flag, &mut times) {
+            self.report_error(ctx, error.to_string());
         }
         self.times = times;
         let now = Instant::now();
@@ -451,6 +440,14 @@ impl SheerApp {
             self.frame_history.pop_front();
         }
         self.frame_history.push_back(frame_ms);
+        // The first interval runs from the app's creation, not from a frame.
+        if self.options.frames.is_some()
+            && self.frames_run > 0
+            && let Ok(mut frame_times) = self.frame_times.lock()
+        {
+            frame_times.milliseconds.push(f64::from(frame_ms));
+            frame_times.adapter = self.renderer.adapter().to_owned();
+        }
     }
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
@@ -702,15 +699,13 @@ impl SheerApp {
             "{:.1} frames/s ({mean:.1} ms)",
             1e3 / mean.max(1e-3)
         ));
-        // Shading's CPU side (per-path evaluation, staging the uploads, encoding) apart from the
-        // GPU's (submit to finish, the uploads' copies included).
+        // Shading's CPU side (sort, per-path evaluation, staging the uploads, encoding); the GPU's work
+        // runs beside the next frame's and shows in the frame time.
         ui.monospace(format!(
-            "simulation   {:6.2} ms\nnormals      {:6.2} ms\nshading, CPU {:6.2} ms\nGPU          {:6.2} ms\nread-back    {:6.2} ms",
+            "simulation   {:6.2} ms\nnormals      {:6.2} ms\nshading, CPU {:6.2} ms",
             ms(self.times.simulation),
             ms(self.times.normals),
-            ms(self.times.shading.saturating_sub(self.times.gpu)),
-            ms(self.times.gpu),
-            ms(self.times.readback)
+            ms(self.times.shading),
         ));
         ui.small(format!("adapter: {}", self.renderer.adapter()));
         // Frame-time history, 0 to the largest recent frame time.
@@ -788,37 +783,42 @@ impl eframe::App for SheerApp {
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
             });
-        egui::CentralPanel::default().show(ui, |ui| {
-            let available = ui.available_size();
-            self.image_area = available;
-            if !image_fits(available) {
-                ui.colored_label(
-                    egui::Color32::from_rgb(255, 110, 110),
-                    too_small_message(available),
-                );
-            } else if let Some(texture) = &self.texture {
-                let size = texture.size_vec2();
-                let scale = (available.x / size.x).min(available.y / size.y);
-                let response = ui.add(
-                    egui::Image::new(texture)
-                        .fit_to_exact_size(size * scale)
-                        .sense(egui::Sense::drag()),
-                );
-                if response.dragged() {
-                    let delta = response.drag_delta();
-                    self.orbit.0 -= delta.x * 0.01;
-                    self.orbit.1 = (self.orbit.1 + delta.y * 0.01).clamp(-1.4, 1.4);
-                    self.apply_orbit();
-                }
-                if response.hovered() {
-                    let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-                    if scroll != 0.0 {
-                        self.orbit.2 = (self.orbit.2 * (1.0 - scroll * 0.002)).clamp(0.3, 20.0);
+        // No fill behind the image: on a software rasteriser a panel-sized quad costs as much as the
+        // image itself, and eframe has cleared the window already.
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| {
+                let available = ui.available_size();
+                self.image_area = available;
+                if !image_fits(available) {
+                    ui.colored_label(
+                        egui::Color32::from_rgb(255, 110, 110),
+                        too_small_message(available),
+                    );
+                } else if let Some(texture) = self.renderer.texture_id() {
+                    let (width, height) = self.renderer.size();
+                    let size = egui::vec2(width as f32, height as f32);
+                    let scale = (available.x / size.x).min(available.y / size.y);
+                    let response = ui.add(
+                        egui::Image::new((texture, size))
+                            .fit_to_exact_size(size * scale)
+                            .sense(egui::Sense::drag()),
+                    );
+                    if response.dragged() {
+                        let delta = response.drag_delta();
+                        self.orbit.0 -= delta.x * 0.01;
+                        self.orbit.1 = (self.orbit.1 + delta.y * 0.01).clamp(-1.4, 1.4);
                         self.apply_orbit();
                     }
+                    if response.hovered() {
+                        let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+                        if scroll != 0.0 {
+                            self.orbit.2 = (self.orbit.2 * (1.0 - scroll * 0.002)).clamp(0.3, 20.0);
+                            self.apply_orbit();
+                        }
+                    }
                 }
-            }
-        });
+            });
         if let Some(limit) = self.options.frames
             && self.frames_run >= limit
             && !self.screenshot_requested
@@ -835,6 +835,35 @@ impl eframe::App for SheerApp {
             }
         }
         ctx.request_repaint();
+    }
+}
+
+/// The frame times of a scripted run.
+#[derive(Debug, Default)]
+struct FrameTimes {
+    milliseconds: Vec<f64>,
+    adapter: String,
+}
+
+impl FrameTimes {
+    /// `window: N frames, median M ms, p95 P ms, F frames/s, adapter A`, or nothing before two frames.
+    fn line(&self) -> Option<String> {
+        let mut sorted = self.milliseconds.clone();
+        if sorted.is_empty() {
+            return None;
+        }
+        sorted.sort_by(f64::total_cmp);
+        let n = sorted.len();
+        // Nearest rank: the smallest time that at least p of the frames do not exceed.
+        let rank = |p: f64| sorted[((p * n as f64).ceil() as usize).clamp(1, n) - 1];
+        let mean = sorted.iter().sum::<f64>() / n as f64;
+        Some(format!(
+            "window: {n} frames, median {:.1} ms, p95 {:.1} ms, {:.1} frames/s, adapter {}",
+            rank(0.5),
+            rank(0.95),
+            1e3 / mean,
+            self.adapter
+        ))
     }
 }
 
@@ -856,27 +885,65 @@ fn too_small_message(available: egui::Vec2) -> String {
     )
 }
 
-/// Opens the window; returns when it closes.
+/// Opens the window; returns when it closes. A scripted run (`--frames N`) then prints one line: frames,
+/// median and 95th-percentile frame time, frames per second and the adapter.
 pub fn run(options: WindowOptions) -> Result<(), CliError> {
     if let Some(path) = &options.screenshot {
         check_screenshot_path(path)?;
     }
     let scene = crate::load_scene(options.scene.as_deref())?;
-    let app = SheerApp::new(scene, options)?;
+    let samples = scene.render.samples;
+    let mut app = SheerApp::new(scene, options)?;
     let failure = Arc::clone(&app.script_failure);
+    let summary = Arc::clone(&app.frame_times);
+    let mut wgpu_options = eframe::egui_wgpu::WgpuConfiguration::default().with_surface_config(
+        eframe::egui_wgpu::SurfaceConfig {
+            present_mode: wgpu::PresentMode::AutoNoVsync,
+            desired_maximum_frame_latency: Some(1),
+        },
+    );
+    if let eframe::egui_wgpu::WgpuSetup::CreateNew(setup) = &mut wgpu_options.wgpu_setup {
+        // eframe's device, with the features the flag's renderer can use and the adapter's texture
+        // size (the all-orders table is one texture).
+        let base = Arc::clone(&setup.device_descriptor);
+        setup.device_descriptor = Arc::new(move |adapter| {
+            let mut descriptor = base(adapter);
+            descriptor.required_features |= wanted_features(adapter);
+            descriptor.required_limits.max_texture_dimension_2d =
+                adapter.limits().max_texture_dimension_2d;
+            descriptor
+        });
+    }
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size([1000.0, 620.0])
             .with_title("sheer — thin cloth"),
         renderer: eframe::Renderer::Wgpu,
+        wgpu_options,
+        // Dithering costs a hash per pixel on a software rasteriser and the image is already 8-bit sRGB.
+        dithering: false,
         ..Default::default()
     };
-    eframe::run_native("sheer", native, Box::new(|_| Ok(Box::new(app))))
-        .map_err(|e| CliError::new(format!("window: {}", window_error_reason(&e.to_string()))))?;
-    match failure.lock().ok().and_then(|mut f| f.take()) {
-        Some(message) => Err(CliError::new(message)),
-        None => Ok(()),
+    eframe::run_native(
+        "sheer",
+        native,
+        Box::new(move |creation| {
+            let render_state = creation
+                .wgpu_render_state
+                .as_ref()
+                .ok_or_else(|| CliError::new("the window has no wgpu device"))?;
+            app.renderer.attach(render_state, samples)?;
+            Ok(Box::new(app))
+        }),
+    )
+    .map_err(|e| CliError::new(format!("window: {}", window_error_reason(&e.to_string()))))?;
+    if let Some(message) = failure.lock().ok().and_then(|mut f| f.take()) {
+        return Err(CliError::new(message));
     }
+    if let Some(line) = summary.lock().ok().and_then(|s| s.line()) {
+        crate::outln!("{line}")?;
+    }
+    Ok(())
 }
 
 /// `--screenshot`: a `.png` in an existing directory, checked before the window opens (the window

@@ -453,6 +453,17 @@ pub enum ShadingError {
         /// Largest τ1 of the table.
         max: f64,
     },
+    /// An opaque mesh (a flag pole) that cannot be drawn: what is wrong with it.
+    #[error("opaque mesh: {0}")]
+    OpaqueMesh(String),
+    /// The light marker's radius must be finite and > 0, its radiance finite and ≥ 0.
+    #[error("light marker of radius {radius_pixels} px and radiance {radiance:?} W/(m²·sr)")]
+    LightMarker {
+        /// Radius, pixels.
+        radius_pixels: f32,
+        /// Radiance per channel.
+        radiance: [f32; 3],
+    },
 }
 
 /// Material, light and display parameters.
