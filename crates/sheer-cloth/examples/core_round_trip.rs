@@ -5,7 +5,7 @@
 //!
 //! The team's threads hand each other rows of the cloth at every stage of a sub-step, so two-thread
 //! timings of a small cloth move with this figure: on the 2-core virtual machines of this project it
-//! has been seen between about 100 and 530 ns within one session, as the host moved the virtual cores.
+//! has been seen anywhere between about 100 and 530 ns, as the host moved the virtual cores.
 //! Print it next to two-thread benchmarks to tell a slower machine from a slower program.
 
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -426,8 +426,7 @@ pub(crate) struct FamilyConstants {
 /// does: the chain of dependent operations from the particles' loads to their stores is about a third
 /// shorter (the square root's result used to feed a division, then the gradient, the damping rate and
 /// the step, one after the other). The strip loops were bound by that chain, not by their operation
-/// count: too few blocks of eight fit in the CPU's window to cover it (the crate README, "Measured
-/// cost"). Mathematically the same update; the rounding differs from `Δλ·(d·(1/L))` by a few ulp.
+/// count: too few blocks of eight fit in the CPU's window to cover it. Mathematically the same update; the rounding differs from `Δλ·(d·(1/L))` by a few ulp.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(

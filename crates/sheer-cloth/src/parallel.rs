@@ -7,8 +7,7 @@
 //! Passes go to rayon's pool, or, inside [`TeamSlot::lead`], to a *team*: threads that belong to one
 //! simulation and spin between passes. A small cloth's sub-step is eleven passes of a few microseconds
 //! each; rayon's workers fall asleep between them and take longer to wake than a pass takes, while a
-//! spinning team hands a pass over at the cost of a few cache-line transfers (the crate README has the
-//! measurements).
+//! spinning team hands a pass over at the cost of a few cache-line transfers.
 
 use std::cell::{Cell, UnsafeCell};
 use std::marker::PhantomData;
@@ -321,9 +320,8 @@ fn start_team(threads: usize) -> Option<(Arc<Team>, Vec<JoinHandle<()>>)> {
 ///
 /// A team hands rows from core to core at every stage of a sub-step, so this latency is part of the
 /// cost of a step on two threads: on a virtual machine whose host sometimes places its two CPUs on cores
-/// far apart (the build machine: about 30 ns, or about 150 ns), the default flag's frame on two threads
-/// follows it (the crate README, "Against the target"). `sheer bench sim` prints it beside two-thread
-/// figures.
+/// far apart (about 30 ns near, about 150 ns far on a 2-core virtual machine), the default flag's
+/// frame on two threads follows it. `sheer bench sim` prints it beside two-thread figures.
 pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std::time::Duration> {
     use std::sync::atomic::AtomicU64;
     use std::time::Instant;

@@ -582,7 +582,7 @@ pub struct SimParams {
     /// bit-identical either way. The team pays from about 400 particles when the machine has a free
     /// core for each of its threads; the default leaves cloths below 16 384 particles (where
     /// rayon's pool starts to pay) on one thread, so that a small cloth does not take a second core
-    /// unasked, e.g. from the app's renderer (see the crate README for the measurements).
+    /// unasked, e.g. from the app's renderer.
     pub parallel_min_particles: usize,
 }
 

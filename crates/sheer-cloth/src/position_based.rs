@@ -58,14 +58,13 @@ pub(crate) struct PackedConstraint {
 const MIN_PARALLEL_BATCH: usize = 2048;
 
 /// A grid's sweeps run as one wavefront a sub-step from this many particles: below it the cloth's data
-/// largely stays in the last-level cache from pass to pass, and pass by pass measured as fast or faster
-/// (crate README, "One pass per sub-step").
+/// largely stays in the last-level cache from pass to pass, and pass by pass measured as fast or faster.
 const WAVEFRONT_MIN_PARTICLES: usize = 262_144;
 
 /// A grid's whole step runs as wavefronts of several sub-steps a pass from this many particles: below it
 /// pass by pass measured as fast on one thread and faster on two (200 × 200), or faster (181 × 181);
 /// at 256 × 256 the passes of several sub-steps took 0.90× as long on one thread (median), at 362 × 362
-/// 0.61–0.83× (crate README, "Several sub-steps a pass" and "From 65 536 particles").
+/// 0.61–0.83×: a row then comes from memory once for several sub-steps.
 const WHOLE_STEP_WAVEFRONT_MIN_PARTICLES: usize = 65_536;
 
 /// With threads, the wavefront of one sub-step needs this many rows per thread per row of its depth:
@@ -79,7 +78,7 @@ const WHOLE_STEP_WAVEFRONT_ROWS_PER_DEPTH: usize = 6;
 /// A whole step's wavefront takes as many sub-steps a pass as keep each thread's rows in flight within
 /// about this many bytes of the last-level cache (so `n` threads keep `n` times as much; measured on two
 /// threads sharing 32 MiB): measured best at 2 sub-steps a pass on 1 024 columns and 4 on 512 (6.0 MB
-/// each; crate README, "Several sub-steps a pass").
+/// each).
 const WAVEFRONT_WINDOW_BYTES: usize = 7 << 20;
 
 /// About what a particle of a grid takes in the arrays a sub-step reads: positions, start positions
@@ -527,14 +526,14 @@ impl Simulation {
     /// A large grid's whole step goes as wavefronts instead ([`Wavefront`]), each pass running as many
     /// sub-steps one behind the other as keep the rows in flight within [`WAVEFRONT_WINDOW_BYTES`]:
     /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
-    /// a pass, once every `k` (same bits, tested; crate README, "Several sub-steps a pass"). On a team
+    /// a pass, once every `k` (same bits, tested). On a team
     /// that claims its passes they go either in parts (the rows cut between the threads, the seams
     /// around the cuts after them) or, where passes in parts fit but hold fewer sub-steps than one
     /// thread's, the seams needing rows: on two threads as two opposed parts, each thread sweeping
     /// its own half of the rows, one down and one up, and waiting for the other only across the cut
-    /// ([`Wavefront::opposed_parts`]; crate README, "Two opposed parts"); on more, as a chain, one
+    /// ([`Wavefront::opposed_parts`]); on more, as a chain, one
     /// pass (*link*) per thread at a time, each following the one before down the rows
-    /// ([`Wavefront::run_link`]; crate README, "A chain of wavefronts"). Where no pass fits the
+    /// ([`Wavefront::run_link`]). Where no pass fits the
     /// parts, sub-step by sub-step.
     pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
         let (iterations, pbd_stiffness) = match self.params.method {
@@ -1078,8 +1077,7 @@ impl Simulation {
             });
             // On a team of two whose attachments read their own rows' pins, two parts sweeping
             // opposite ways where their passes hold more sub-steps than passes in parts would: each
-            // thread keeps its own rows, as in parts, without seams to make room for (crate README,
-            // "Two opposed parts").
+            // thread keeps its own rows, as in parts, without seams to make room for.
             if let (GridSweep::Auto, Some(2), 0) = (sweep_order, chain_team, reach)
                 && in_parts
                     .as_ref()
@@ -1089,7 +1087,7 @@ impl Simulation {
             }
             // On a larger team, a chain where each of its links holds more sub-steps than a pass in
             // parts would: both stream a row from memory once a pass (or link), but a chain has no
-            // seams to make room for (crate README, "A chain of wavefronts"). Where no pass fits the
+            // seams to make room for. Where no pass fits the
             // parts the step goes sub-step by sub-step as before: neither is measured there.
             if let (GridSweep::Auto, Some(team)) = (sweep_order, chain_team) {
                 let sizes = link_sizes(substep_count, most, team);
@@ -1645,8 +1643,8 @@ struct PipelineStages {
 
 /// The cost of one row's work in the pipeline, relative to projecting one constraint of an apart strip:
 /// per constraint along a row, per cell of the wind, per particle (forces, prediction, attachments,
-/// velocities). From `perf record -e cpu-clock` of `fingerprint time 64x46 1 1500` (AMD EPYC,
-/// 2026-12-02): apart strips 30.8 % of the samples for 11 366 constraints, along strips 21.2 % for
+/// velocities). From `perf record -e cpu-clock` of `fingerprint time 64x46 1 1500` (AMD EPYC): apart
+/// strips 30.8 % of the samples for 11 366 constraints, along strips 21.2 % for
 /// 5 750, the wind's cells 18.2 % for 2 835, the per-particle loops 20.7 % for 2 944 particles.
 const COST_ALONG: f64 = 1.37;
 const COST_CELL: f64 = 2.4;

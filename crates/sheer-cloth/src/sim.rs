@@ -104,14 +104,10 @@ pub(crate) struct CgScratch {
 
 /// Particles per thread of a team from which it claims its passes chunk by chunk
 /// ([`TeamSlot::lead`], [`team_claims_its_passes`]); below it each thread keeps its own part of the
-/// cloth, and a grid's position-based step runs as one pass of the pipeline. On two threads the
-/// pipeline took 0.76–0.87× the time (medians of interleaved rounds) of claimed passes or of a
-/// chain of wavefronts from 128 × 128 to 288 × 288 (82 944 particles), and 1.03–1.21× from
-/// 300 × 300 (90 000) on (crate README, "Each thread on its own rows up to 86 016 particles"). Counted
-/// per thread: on a 16-core machine, teams of 4–12 threads ran grids of 131 k and 190 k particles
-/// as the pipeline in 0.66–0.88× the time of claimed passes (medians; a chain of wavefronts on four
-/// threads at 362 × 362, sub-step by sub-step on 8 and 12, whose parts had too few rows for
-/// wavefronts; crate README, "More threads keep their own rows longer").
+/// cloth, and a grid's position-based step runs as one pass of the pipeline. Why 86 016 on two
+/// threads: the pipeline was faster than claiming up to 82 944 particles and slower from 90 000, likely
+/// where the data a step touches outgrows the two cores' caches; counted per thread because a larger
+/// team gives each thread fewer rows of the same cloth.
 pub(crate) const TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD: usize = 43_008;
 
 /// Rows of a grid per thread of its team: a team takes at most `rows / TEAM_ROWS_PER_THREAD`
@@ -120,9 +116,8 @@ pub(crate) const TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD: usize = 43_008;
 /// so a part may get a row less than the mean (with four rows a thread, 5 × 12 in three parts does
 /// not fit; five fit every grid of 10–200 rows, `the_team_the_rows_allow_fits_the_pipeline`). A
 /// team too large for it steps sub-step by sub-step, 220 hand-offs a frame of small-steps XPBD ×20
-/// across all its threads: on the 16-core machine of "More threads keep their own rows longer"
-/// (crate README) the default flag (46 rows) took 0.79–1.18 ms a frame on teams of 4–11 threads and
-/// 1.5–53.8 ms on 12 and 16. At least two, so that a grid of few rows still runs on a team rather
+/// across all its threads: on a 16-core machine the default flag (46 rows) took 0.79–1.18 ms a frame
+/// on teams of 4–11 threads and 1.5–53.8 ms on 12 and 16. At least two, so that a grid of few rows still runs on a team rather
 /// than on rayon's pool, whose hand-off is slower than a pass.
 pub(crate) const TEAM_ROWS_PER_THREAD: usize = 5;
 

@@ -9,7 +9,7 @@
 //! decide whether a load must wait for an earlier store ("4K aliasing"). A [`Staggered`] array starts
 //! where a counter says instead: the `k`-th array at line `(k · 23) mod 64` of its page (23 is odd, so
 //! 64 arrays in a row all start on different lines). Only where the data lies changes, never the
-//! arithmetic, so the results are the same bits (crate README, "Arrays on lines of their own"). Only
+//! arithmetic, so the results are the same bits. Only
 //! the split components (`components.rs`) are made this way: staggering the inverse masses and the
 //! constraints' constants as well was measured and gained nothing more.
 

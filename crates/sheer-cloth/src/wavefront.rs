@@ -43,8 +43,8 @@
 //! after the link before it had), or, on the same thread, because links run there in order. No seams
 //! run on one thread while the others wait, so a link can hold as many sub-steps as one thread's
 //! cache allows however few rows each thread would get; but the thread after reads each row from the
-//! other core a link's depth of rows later, which on the build machine cost as much as reading it
-//! from memory (crate README, "A chain of wavefronts").
+//! other core a link's depth of rows later, which on a 2-core virtual machine cost as much as
+//! reading it from memory.
 //!
 //! Two *opposed parts* keep each of two threads on its own rows without seams. Each strip goes to the
 //! part that holds its first row; one part sweeps its rows downwards as above, the other upwards
@@ -65,7 +65,7 @@
 //! parts for every cut of short grids and several of tall ones, each part running ahead, by turns
 //! and at random, and on threads.) When the parts sweep towards the cut, they meet there at the end
 //! of a pass; the solver turns them round every pass, so that each pass starts on the rows the one
-//! before ended on, and keeps each part on the same thread (crate README, "Two opposed parts").
+//! before ended on, and keeps each part on the same thread, whose caches still hold those rows.
 
 use std::ops::Range;
 

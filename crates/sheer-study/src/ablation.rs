@@ -12,8 +12,8 @@
 //! What a part costs is timed apart from the accuracy runs ([`CostTiming`]): each variant beside the
 //! full model, the two runs taking turns every few frames, for a few rounds, and the variant's time over
 //! the full model's in the same round ([`CostRatio`]). One run each had not been enough: over the
-//! minutes an ablation takes, the host's pace drifts by more than most parts cost (a run of 2026-12-03
-//! had the flag without bending 22 % *dearer* than with it), and even back to back, a simulated second
+//! minutes an ablation takes, the host's pace drifts by more than most parts cost (one such run had
+//! the flag without bending 22 % *dearer* than with it), and even back to back, a simulated second
 //! each, the rounds' ratios spread by ±15 %.
 
 use sheer_cloth::glam::DVec3;

@@ -5,7 +5,7 @@
 //! 0.0201, docs/study.md), half the default budget. One run against one reference then cannot tell a
 //! setting that changes the picture by 0.01 from one that changes nothing: the study's rows for the
 //! wind's renewal interval and the springs' dashpots sit inside the budget but within that noise of the
-//! full model, and an earlier full run moved the choice the other way (docs/study.md, "History").
+//! full model, and a full run against another reference could move the choice the other way.
 //!
 //! Here each setting runs on `n` scenes that differ only in the seed of the wind's gusts and turbulence
 //! ([`sheer_cloth::Wind::seed`]): `n` independent flutters, each against its own converged reference

@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 const HOPF_CONSTANT: f64 = 0.710_446_089_598_26;
 
 /// Largest relative change of emergent radiances under [`Discretisation::refined`] measured over
-/// τ1 ∈ [0.01, 30], μ0, μ ∈ [0.05, 1] (README, "Convergence"): 1.7e-6. Tolerances below that compare
+/// τ1 ∈ [0.01, 30], μ0, μ ∈ [0.05, 1] (README, "Measured figures"): 1.7e-6. Tolerances below that compare
 /// two solver results allow twice this (one error per side), rounded up to 5e-6.
 const SOLVER_RELATIVE_ACCURACY: f64 = 5.0e-6;
 
@@ -88,7 +88,7 @@ fn gauss_legendre_is_exact_for_polynomials_up_to_degree_2n_minus_1() {
 #[test]
 fn conservative_slab_conserves_energy() {
     // Λ = 1: reflected + transmitted diffuse flux + direct = μ0 (incident flux per unit normal
-    // irradiance). The issue asks for 1e-4; measured worst is 3.4e-7 (README).
+    // irradiance). The target is 1e-4; the measured worst is 3.4e-7 (README).
     for tau1 in [0.01, 0.2, 2.0, 10.0] {
         let slab = SlabSolver::new(tau1, 1.0).unwrap();
         for mu0 in [0.05, 0.3, 0.7, 1.0] {
