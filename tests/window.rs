@@ -14,14 +14,34 @@ fn the_window_runs_frames_and_saves_a_screenshot_of_panel_and_flag() {
     let dir = std::env::temp_dir().join(format!("sheer-window-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let shot = dir.join("window.png");
-    let status = Command::new("xvfb-run")
+    let output = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1280x800x24"])
         .arg(env!("CARGO_BIN_EXE_sheer"))
         .args(["--frames", "20", "--screenshot"])
         .arg(&shot)
-        .status()
+        .output()
         .expect("xvfb-run must be installed (Debian package xvfb; .ci/run installs it)");
-    assert!(status.success(), "the window exited with {status}");
+    assert!(
+        output.status.success(),
+        "the window exited with {}",
+        output.status
+    );
+    // One summary line: `window: N frames, median M ms, p95 P ms, F frames/s, adapter A`.
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("window: "))
+        .unwrap_or_else(|| panic!("no summary line in {stdout:?}"));
+    let numbers: Vec<f64> = line
+        .split([' ', ','])
+        .filter_map(|word| word.parse().ok())
+        .collect();
+    let [frames, median, p95, fps] = numbers[..4] else {
+        panic!("summary line {line:?}");
+    };
+    assert!(frames >= 19.0, "{line}");
+    assert!(0.0 < median && median <= p95 && fps > 0.0, "{line}");
+    assert!(line.contains(", adapter "), "{line}");
     let image = image::open(&shot)
         .expect("a screenshot was written")
         .to_rgb8();
