@@ -354,6 +354,10 @@ fn bad_opaque_meshes_and_markers_are_typed_errors() {
     let mut mesh = pole(0.0);
     mesh.albedo = [1.5, 0.5, 0.5];
     assert!(mesh.validate().is_err());
+    let mut mesh = pole(0.0);
+    mesh.normals[3] = [0.0; 3];
+    assert!(mesh.validate().is_err());
+    assert!(pole(0.0).validate().is_ok());
     let Some(mut renderer) = renderer() else {
         return;
     };

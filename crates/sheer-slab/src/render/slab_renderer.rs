@@ -127,7 +127,7 @@ impl OpaqueMesh {
         Ok(mesh)
     }
 
-    /// Checks lengths, indices, finiteness and the albedo range.
+    /// Checks lengths, indices, finiteness, normals (of about unit length) and the albedo range.
     pub fn validate(&self) -> Result<(), ShadingError> {
         let fail = |what: String| Err(ShadingError::OpaqueMesh(what));
         if self.normals.len() != self.positions.len() {
@@ -156,6 +156,14 @@ impl OpaqueMesh {
         let finite = |v: &[f32; 3]| v.iter().all(|c| c.is_finite());
         if !self.positions.iter().all(finite) || !self.normals.iter().all(finite) {
             return fail("a position or normal is not finite".into());
+        }
+        // The shader normalises them: a zero normal would give a NaN pixel.
+        if let Some(normal) = self
+            .normals
+            .iter()
+            .find(|n| Vec3::from_array(**n).length() < 0.5)
+        {
+            return fail(format!("normal {normal:?} is not a unit vector"));
         }
         if !self.albedo.iter().all(|a| (0.0..=1.0).contains(a)) {
             return fail(format!("albedo {:?} outside [0, 1]", self.albedo));
