@@ -38,6 +38,11 @@ struct Frame {
     output: vec4<f32>,
     // rgb: the light marker's radiance (W/(m²·sr)).
     marker: vec4<f32>,
+    // The shadow map's view and projection from the light (shadow.wgsl).
+    shadow_view_projection: mat4x4<f32>,
+    // x: the shadow map's resolution (texels); y: a texel's width per metre of distance from the light;
+    // z: the bias per metre of distance for rounding and curvature.
+    shadow: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -308,24 +313,40 @@ fn sky_radiance_on_face(m: vec3<f32>) -> vec3<f32> {
     return max(sum, vec3<f32>(0.0));
 }
 
-// The sky's radiance toward the eye per unit albedo: L_in(m)·R_d/Λ + L_in(−m)·T_d/Λ per channel, m the
-// normal of the face the eye sees, μ = |n·e| floored as the point light's is. A zero normal gets none.
-// `nodes` and `albedos`: where τ1 and Λ fall on the tables' shared axes (the all-orders lookup of the same
-// fragment uses them too, so they are found once).
-fn sky_radiance_per_albedo(normal: vec3<f32>, to_eye: vec3<f32>, nodes: AllOrdersChannels,
-        albedos: AllOrdersChannelAlbedos) -> vec3<f32> {
+// The face the eye sees (outward unit normal m) and μ = |n·e| floored, for the diffuse responses.
+struct DiffuseView {
+    face: vec3<f32>,
+    mu: f32,
+    // False for a zero normal: no diffuse light.
+    valid: bool,
+}
+
+fn diffuse_view(normal: vec3<f32>, to_eye: vec3<f32>) -> DiffuseView {
     let length_squared = dot(normal, normal);
     let n = normal * inverseSqrt(select(1.0, length_squared, length_squared > 0.0));
     let s = dot(n, normalize(to_eye));
-    let face = select(-n, n, s >= 0.0);
-    let mu = clamp(abs(s), COSINE_FLOOR, 1.0);
+    return DiffuseView(select(-n, n, s >= 0.0), clamp(abs(s), COSINE_FLOOR, 1.0), length_squared > 0.0);
+}
+
+// (R_d/Λ, T_d/Λ) per channel at μ: the slab's response to uniform diffuse light on one face.
+struct DiffuseResponse {
+    reflected: vec3<f32>,
+    transmitted: vec3<f32>,
+}
+
+fn diffuse_response(nodes: AllOrdersChannels, albedos: AllOrdersChannelAlbedos, mu: f32) -> DiffuseResponse {
     let red = diffuse_log_values(nodes.red, albedos.red, mu);
     let green = diffuse_log_values(nodes.green, albedos.green, mu);
     let blue = diffuse_log_values(nodes.blue, albedos.blue, mu);
-    let reflected = exp(vec3<f32>(red.x, green.x, blue.x));
-    let transmitted = exp(vec3<f32>(red.y, green.y, blue.y));
-    let sky = sky_radiance_on_face(face) * reflected + sky_radiance_on_face(-face) * transmitted;
-    return select(vec3<f32>(0.0), sky, length_squared > 0.0);
+    return DiffuseResponse(exp(vec3<f32>(red.x, green.x, blue.x)), exp(vec3<f32>(red.y, green.y, blue.y)));
+}
+
+// The sky's radiance toward the eye per unit albedo: L_in(m)·R_d/Λ + L_in(−m)·T_d/Λ per channel, m the
+// face the eye sees, the response at μ = |n·e| floored as the point light's is. A zero normal gets none.
+fn sky_radiance_with(view: DiffuseView, response: DiffuseResponse) -> vec3<f32> {
+    let sky = sky_radiance_on_face(view.face) * response.reflected
+        + sky_radiance_on_face(-view.face) * response.transmitted;
+    return select(vec3<f32>(0.0), sky, view.valid);
 }
 
 struct SlabValues {
@@ -344,6 +365,8 @@ struct SlabPoint {
     eye_on_lit_side: bool,
     // Irradiance normal to the beam Φ/(4πr²), or eq. (6)'s surface irradiance Φμ0/(4πr²) (W/m²).
     irradiance: f32,
+    // Irradiance normal to the beam Φ/(4πr²) whatever the convention (W/m²); 0 where no light arrives.
+    normal_irradiance: f32,
 }
 
 fn slab_point(position: vec3<f32>, normal: vec3<f32>) -> SlabPoint {
@@ -358,9 +381,9 @@ fn slab_point(position: vec3<f32>, normal: vec3<f32>) -> SlabPoint {
     let distance_squared = dot(to_light, to_light);
     let received = select(0.0, 1.0, side.mu0 > 0.0 && distance_squared > 0.0);
     let convention_factor = select(1.0, mu0, frame.albedo_scale.w > 0.5);
-    let irradiance = received * convention_factor * frame.light.w
+    let normal_irradiance = received * frame.light.w
         / (4.0 * PI * select(1.0, distance_squared, distance_squared > 0.0));
-    return SlabPoint(mu0, mu, side.eye_on_lit_side, irradiance);
+    return SlabPoint(mu0, mu, side.eye_on_lit_side, convention_factor * normal_irradiance, normal_irradiance);
 }
 
 // Single scattering at one point: eqs. (4)/(5) per channel per unit albedo, and α.
@@ -387,7 +410,8 @@ fn single_values(point: SlabPoint, tau: vec3<f32>) -> SlabValues {
 
 // The model at one point: lit-side rule, point-light irradiance, eqs. (4)/(5) per channel and α; with
 // `all_orders` plus the table's multiple part, for which `albedo` (Λ per channel) is needed.
-fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>) -> SlabValues {
+fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: vec3<f32>,
+        light: LightTransmission) -> SlabValues {
     let point = slab_point(position, normal);
     var values = single_values(point, tau);
     if all_orders || sky_light {
@@ -399,12 +423,31 @@ fn slab_values(position: vec3<f32>, normal: vec3<f32>, tau: vec3<f32>, albedo: v
                 all_orders_face_rows(point.eye_on_lit_side));
             values.radiance_per_albedo += albedo * (point.mu0 * exp(log_value)) * point.irradiance;
         }
-        if sky_light {
-            values.radiance_per_albedo += sky_radiance_per_albedo(normal, frame.eye.xyz - position, nodes,
-                albedos);
+        values.radiance_per_albedo *= light.direct;
+        if sky_light || (all_orders && shadows) {
+            // One lookup of the diffuse responses serves the sky and the light through a layer in front.
+            let view = diffuse_view(normal, frame.eye.xyz - position);
+            let response = diffuse_response(nodes, albedos, view.mu);
+            if all_orders && shadows {
+                values.radiance_per_albedo += diffuse_through_per_albedo(point, light, response);
+            }
+            if sky_light {
+                values.radiance_per_albedo += sky_radiance_with(view, response);
+            }
         }
+    } else {
+        values.radiance_per_albedo *= light.direct;
     }
     return values;
+}
+
+// The light a layer in front scatters through itself, arriving isotropically on this point's lit face with
+// radiance μ0·E⊥·D (shadow.wgsl), and this slab's all-orders response to it per unit albedo: R_d/Λ toward
+// an eye on the lit side, T_d/Λ toward one on the far side (the diffuse table, as for the sky).
+fn diffuse_through_per_albedo(point: SlabPoint, light: LightTransmission, response: DiffuseResponse)
+        -> vec3<f32> {
+    let toward_eye = select(response.transmitted, response.reflected, point.eye_on_lit_side);
+    return toward_eye * light.diffuse * (point.mu0 * point.normal_irradiance);
 }
 
 // τ1 per channel at uv; the thickness texture is only sampled when present (fixed per pipeline).
@@ -443,24 +486,30 @@ struct VertexInput {
 
 // ---- per fragment -------------------------------------------------------------------------------------
 
+// The shadow map is looked up per vertex on every path (shadow.wgsl) and interpolated: sixteen loads per
+// vertex instead of per fragment, at the cost of shadow edges as soft as a triangle.
 struct FragmentPathVarying {
     @builtin(position) clip_position: vec4<f32>,
     @location(0) world_position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) shadow_direct: vec3<f32>,
+    @location(4) shadow_diffuse: vec3<f32>,
 }
 
 @vertex
 fn vs_per_fragment(input: VertexInput) -> FragmentPathVarying {
+    let light = light_transmission_at_vertex(input.position, input.normal);
     return FragmentPathVarying(frame.view_projection * vec4<f32>(input.position, 1.0), input.position,
-        input.normal, input.uv);
+        input.normal, input.uv, light.direct, light.diffuse);
 }
 
 @fragment
 fn fs_per_fragment(input: FragmentPathVarying) -> SlabOutput {
     let tau = optical_thickness_at(input.uv);
     let albedo = albedo_at(input.uv);
-    let values = slab_values(input.world_position, input.normal, tau, albedo);
+    let values = slab_values(input.world_position, input.normal, tau, albedo,
+        LightTransmission(input.shadow_direct, input.shadow_diffuse));
     return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
 }
 
@@ -488,12 +537,16 @@ struct MultipleAtVertexVarying {
     @location(2) uv: vec2<f32>,
     @location(3) multiple_lit: vec3<f32>,
     @location(4) multiple_far: vec3<f32>,
+    @location(5) shadow_direct: vec3<f32>,
+    @location(6) shadow_diffuse: vec3<f32>,
 }
 
 @vertex
 fn vs_multiple_at_vertex(input: MultipleAtVertexInput) -> MultipleAtVertexVarying {
+    let light = light_transmission_at_vertex(input.position, input.normal);
     return MultipleAtVertexVarying(frame.view_projection * vec4<f32>(input.position, 1.0),
-        input.position, input.normal, input.uv, input.multiple_lit, input.multiple_far);
+        input.position, input.normal, input.uv, input.multiple_lit, input.multiple_far, light.direct,
+        light.diffuse);
 }
 
 @fragment
@@ -505,10 +558,19 @@ fn fs_multiple_at_vertex(input: MultipleAtVertexVarying) -> SlabOutput {
     // L_m/Λ = Λ·μ0·f with the fragment's own Λ and μ0: only f, which varies more slowly, is interpolated.
     let reduced = select(input.multiple_far, input.multiple_lit, point.eye_on_lit_side);
     values.radiance_per_albedo += albedo * (point.mu0 * point.irradiance) * reduced;
-    if sky_light {
+    let light = LightTransmission(input.shadow_direct, input.shadow_diffuse);
+    values.radiance_per_albedo *= light.direct;
+    if sky_light || shadows {
         let nodes = all_orders_channels(tau);
-        values.radiance_per_albedo += sky_radiance_per_albedo(input.normal,
-            frame.eye.xyz - input.world_position, nodes, all_orders_channel_albedos(nodes, albedo));
+        let albedos = all_orders_channel_albedos(nodes, albedo);
+        let view = diffuse_view(input.normal, frame.eye.xyz - input.world_position);
+        let response = diffuse_response(nodes, albedos, view.mu);
+        if shadows {
+            values.radiance_per_albedo += diffuse_through_per_albedo(point, light, response);
+        }
+        if sky_light {
+            values.radiance_per_albedo += sky_radiance_with(view, response);
+        }
     }
     return slab_output(albedo * values.radiance_per_albedo, values.transmittance);
 }
@@ -525,7 +587,8 @@ struct InterpolatedVarying {
 @vertex
 fn vs_per_vertex(input: VertexInput) -> InterpolatedVarying {
     let tau = optical_thickness_at_vertex(input.uv);
-    let values = slab_values(input.position, input.normal, tau, albedo_at_vertex(input.uv));
+    let values = slab_values(input.position, input.normal, tau, albedo_at_vertex(input.uv),
+        light_transmission_at_vertex(input.position, input.normal));
     return InterpolatedVarying(frame.view_projection * vec4<f32>(input.position, 1.0),
         values.radiance_per_albedo, values.transmittance, input.uv);
 }

@@ -562,8 +562,8 @@ fn bench_render_prints_the_documented_csv() {
     assert_eq!(
         lines.next(),
         Some(
-            "path,width,height,fps,ratio_to_baseline,ratio_to_paper,error_p95,simulation_ms,\
-             normals_ms,shading_gpu_ms,gpu_ms,readback_ms"
+            "path,width,height,fps,ratio_to_baseline,ratio_to_paper,error_mean,error_p95,\
+             simulation_ms,normals_ms,shading_gpu_ms,gpu_ms,shadow_ms,readback_ms"
         )
     );
     let rows: Vec<Vec<&str>> = lines.map(|line| line.split(',').collect()).collect();
@@ -580,12 +580,15 @@ fn bench_render_prints_the_documented_csv() {
             "vertex/all-orders+sky",
             "cpu",
             "cpu/all-orders+sky",
+            "fragment/all-orders+sky+shadows",
+            "vertex/all-orders+sky+shadows",
+            "cpu/all-orders+sky+shadows",
             "baseline"
         ],
         "{text}"
     );
     for row in &rows {
-        assert_eq!(row.len(), 12, "{text}");
+        assert_eq!(row.len(), 14, "{text}");
         assert_eq!(row[1..3], ["512", "512"], "{text}");
         let number = |column: usize| -> f64 {
             let value: f64 = row[column].parse().expect("a number");
@@ -596,16 +599,22 @@ fn bench_render_prints_the_documented_csv() {
             number(3) > 0.0 && number(4) > 0.0 && number(5) > 0.0,
             "{text}"
         );
-        let [_, _, shading, gpu, _] = [7, 8, 9, 10, 11].map(number);
-        assert!(gpu <= shading, "{text}");
+        let [_, _, shading, gpu, shadow, _] = [8, 9, 10, 11, 12, 13].map(number);
+        assert!(gpu <= shading && shadow <= gpu, "{text}");
+        assert!(
+            number(6) <= number(7) * 2.0 + 1e-12 || number(7) == 0.0,
+            "{text}"
+        );
     }
     assert_eq!(
         rows[0][5], "1.0",
         "the paper's model against itself: {text}"
     );
-    assert_eq!(rows[3][6], "0.0", "the exact case against itself: {text}");
-    assert_eq!(rows[9][4], "1.0", "the baseline against itself: {text}");
-    let error = |row: usize| -> f64 { rows[row][6].parse().unwrap() };
+    assert_eq!(rows[3][7], "0.0", "the exact case against itself: {text}");
+    assert_eq!(rows[12][4], "1.0", "the baseline against itself: {text}");
+    let error = |row: usize| -> f64 { rows[row][7].parse().unwrap() };
+    // The flag shadows itself somewhere over four light directions.
+    assert!(error(9) > 0.0, "shadows change nothing: {text}");
     assert!(
         error(0) > 0.3,
         "the paper's model is far from all orders with sky: {text}"

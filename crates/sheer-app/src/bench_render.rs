@@ -1,15 +1,17 @@
 //! `sheer bench render`: frames per second of the whole case study per evaluation path, with single
-//! scattering (the paper) and with all orders (the table), with and without sky light, and for the
-//! baseline, at the scene's size (512 × 512 by default), with the time of each stage, in one run. The
+//! scattering (the paper) and with all orders (the table), with and without sky light, with translucent
+//! shadows, and for the baseline, at the scene's size (512 × 512 by default), with the time of each stage, in one run. The
 //! cases are measured in interleaved rounds, so that drift of the machine's load affects them alike;
 //! each case is compared with the paper's model on the fragment path round by round (median of the
 //! per-round frame-time ratios), and its image with the most exact case (all orders and sky light,
-//! the table looked up in every fragment) on the same flag under four light directions: the 95th
-//! percentile of the relative error of the radiance seen in the cloth's pixels. The cost and the error
+//! the table looked up in every fragment, no shadows) on the same flag under four light directions: the
+//! mean and 95th percentile of the relative error of the radiance seen in the cloth's pixels (for the
+//! shadowed cases: what the shadows change). The cost and the error
 //! of each case are what the default's choice rests on (docs/shading-model.md). The shading stage's time
 //! is split as the window's panel splits it: the part from submitting the frame to the GPU until it
 //! has finished (`gpu_ms`; on a software rasteriser the drawing itself) and the rest, CPU work
-//! (evaluation, sorting, uploads, checks).
+//! (evaluation, sorting, uploads, checks); of the GPU's part, the passes before the draw (the shadow
+//! map from the light, uploads) are submitted and timed on their own (`shadow_ms`).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -56,7 +58,8 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     use EvaluationPathName::{Cpu, Fragment, Vertex};
     use Scattering::{AllOrders, Single};
     use ShadingModel::{Baseline, ThinSlab};
-    // (name, model, path, scattering, where the fragment path looks the all-orders table up, sky light).
+    // (name, model, path, scattering, where the fragment path looks the all-orders table up, sky light,
+    // shadows).
     let cases = [
         // The paper's model: the cost every other case is compared with.
         (
@@ -66,6 +69,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             Single,
             TablePerFragment,
             false,
+            false,
         ),
         (
             "fragment/all-orders",
@@ -73,6 +77,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             Fragment,
             AllOrders,
             TablePerFragment,
+            false,
             false,
         ),
         (
@@ -82,6 +87,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             Single,
             TablePerFragment,
             true,
+            false,
         ),
         // The most exact case: the images of the others are compared with its.
         (
@@ -91,6 +97,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             AllOrders,
             TablePerFragment,
             true,
+            false,
         ),
         // The table looked up once per vertex (`all_orders_lookup`).
         (
@@ -100,8 +107,17 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             AllOrders,
             TablePerVertex,
             true,
+            false,
         ),
-        ("vertex", ThinSlab, Vertex, Single, TablePerFragment, false),
+        (
+            "vertex",
+            ThinSlab,
+            Vertex,
+            Single,
+            TablePerFragment,
+            false,
+            false,
+        ),
         (
             "vertex/all-orders+sky",
             ThinSlab,
@@ -109,14 +125,45 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             AllOrders,
             TablePerFragment,
             true,
+            false,
         ),
-        ("cpu", ThinSlab, Cpu, Single, TablePerFragment, false),
+        ("cpu", ThinSlab, Cpu, Single, TablePerFragment, false, false),
         (
             "cpu/all-orders+sky",
             ThinSlab,
             Cpu,
             AllOrders,
             TablePerFragment,
+            true,
+            false,
+        ),
+        // Translucent shadows (the default): their cost against the same case without, and in
+        // `error` what they change in the picture.
+        (
+            "fragment/all-orders+sky+shadows",
+            ThinSlab,
+            Fragment,
+            AllOrders,
+            TablePerFragment,
+            true,
+            true,
+        ),
+        (
+            "vertex/all-orders+sky+shadows",
+            ThinSlab,
+            Vertex,
+            AllOrders,
+            TablePerFragment,
+            true,
+            true,
+        ),
+        (
+            "cpu/all-orders+sky+shadows",
+            ThinSlab,
+            Cpu,
+            AllOrders,
+            TablePerFragment,
+            true,
             true,
         ),
         (
@@ -125,6 +172,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
             Fragment,
             Single,
             TablePerFragment,
+            false,
             false,
         ),
     ];
@@ -142,17 +190,19 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         .collect();
     let select =
         |renderer: &mut FrameRenderer, flag: &mut FlagScene, case: usize| -> Result<(), CliError> {
-            let (_, model, path, scattering, lookup, sky) = cases[case];
+            let (_, model, path, scattering, lookup, sky, shadows) = cases[case];
             flag.scene.shading.model = model;
             flag.scene.shading.path = path;
             let scene = &mut flag.scene;
             if scene.shading.scattering != scattering
                 || scene.shading.all_orders_lookup != lookup
                 || scene.environment.sky_light != sky
+                || scene.shading.shadows != shadows
             {
                 scene.shading.scattering = scattering;
                 scene.shading.all_orders_lookup = lookup;
                 scene.environment.sky_light = sky;
+                scene.shading.shadows = shadows;
                 renderer.update_shading(&flag.scene)?;
             }
             Ok(())
@@ -180,6 +230,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
                 row.stages.normals += times.normals;
                 row.stages.shading += times.shading;
                 row.stages.gpu += times.gpu;
+                row.stages.shadow += times.shadow;
                 row.stages.readback += times.readback;
             }
             let elapsed = start.elapsed();
@@ -205,10 +256,14 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
         }
     }
     let p95: Vec<f64> = errors.iter_mut().map(|e| percentile(e, 0.95)).collect();
+    let means: Vec<f64> = errors
+        .iter()
+        .map(|e| e.iter().sum::<f64>() / e.len().max(1) as f64)
+        .collect();
     let (w, h) = (flag.scene.render.width, flag.scene.render.height);
     let per_frame = |d: Duration, n: u32| d.as_secs_f64() * 1e3 / f64::from(n);
     let baseline_fps = {
-        let b = rows.last().expect("ten rows");
+        let b = rows.last().expect("the baseline row");
         f64::from(b.frames) / b.total.as_secs_f64()
     };
     // Median over rounds of this row's frame time over the paper's model's.
@@ -223,70 +278,77 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     };
     if args.csv {
         outln!(
-            "path,width,height,fps,ratio_to_baseline,ratio_to_paper,error_p95,simulation_ms,normals_ms,shading_gpu_ms,gpu_ms,readback_ms"
+            "path,width,height,fps,ratio_to_baseline,ratio_to_paper,error_mean,error_p95,simulation_ms,normals_ms,shading_gpu_ms,gpu_ms,shadow_ms,readback_ms"
         )?;
     } else {
         outln!("adapter: {}", renderer.adapter())?;
         outln!(
-            "{:<38} {:>9} {:>7} {:>9} {:>7} {:>9} {:>10} {:>8} {:>10} {:>10} {:>10}",
+            "{:<38} {:>9} {:>7} {:>9} {:>7} {:>8} {:>9} {:>8} {:>8} {:>10} {:>10} {:>8} {:>10}",
             "path",
             "size",
             "fps",
             "×baseline",
             "×paper",
+            "err mean",
             "error p95",
             "sim. ms",
             "normals",
             "shade+GPU",
             "of it GPU",
+            "shadow",
             "read-back"
         )?;
     }
-    for (row, error) in rows.iter().zip(&p95) {
+    for ((row, error), mean) in rows.iter().zip(&p95).zip(&means) {
         let fps = f64::from(row.frames) / row.total.as_secs_f64();
         let values = (
             per_frame(row.stages.simulation, row.frames),
             per_frame(row.stages.normals, row.frames),
             per_frame(row.stages.shading, row.frames),
             per_frame(row.stages.gpu, row.frames),
+            per_frame(row.stages.shadow, row.frames),
             per_frame(row.stages.readback, row.frames),
         );
         let paper = against_paper(row);
         if args.csv {
             // CSV numbers in their shortest round-trip form.
             outln!(
-                "{},{w},{h},{fps:?},{:?},{paper:?},{error:?},{:?},{:?},{:?},{:?},{:?}",
+                "{},{w},{h},{fps:?},{:?},{paper:?},{mean:?},{error:?},{:?},{:?},{:?},{:?},{:?},{:?}",
                 row.name,
                 baseline_fps / fps,
                 values.0,
                 values.1,
                 values.2,
                 values.3,
-                values.4
+                values.4,
+                values.5
             )?;
         } else {
             outln!(
-                "{:<38} {:>9} {:>7.1} {:>9.2} {:>7.2} {:>8.1}% {:>10.2} {:>8.2} {:>10.2} {:>10.2} {:>10.2}",
+                "{:<38} {:>9} {:>7.1} {:>9.2} {:>7.2} {:>7.1}% {:>8.1}% {:>8.2} {:>8.2} {:>10.2} {:>10.2} {:>8.2} {:>10.2}",
                 row.name,
                 format!("{w}x{h}"),
                 fps,
                 baseline_fps / fps,
                 paper,
+                100.0 * mean,
                 100.0 * error,
                 values.0,
                 values.1,
                 values.2,
                 values.3,
-                values.4
+                values.4,
+                values.5
             )?;
         }
     }
     if !args.csv {
         outln!(
             "×baseline: frame time relative to the baseline's (1.00 = as fast). ×paper: relative to the \
-             paper's model on the fragment path, median of per-round ratios. error p95: 95th percentile \
-             over the cloth's pixels of the relative error of the radiance seen, against \
-             fragment/all-orders+sky, four light directions."
+             paper's model on the fragment path, median of per-round ratios. err mean, error p95: mean \
+             and 95th percentile over the cloth's pixels of the relative error of the radiance seen, \
+             against fragment/all-orders+sky (no shadows), four light directions. shadow: the GPU's \
+             time for the passes before the draw (the shadow map; uploads)."
         )?;
     }
     Ok(())

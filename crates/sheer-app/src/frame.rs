@@ -13,7 +13,7 @@ use std::sync::{Arc, OnceLock};
 use sheer_slab::render::ShadingError;
 use sheer_slab::render::{
     Background, Camera, EvaluationPath, HeadlessRenderer, LightMarker, LinearImage, OpaqueMesh,
-    ShadingParams, SlabFrame, SlabMesh, Texture2d, srgb8_to_linear,
+    ShadingParams, Shadows, SlabFrame, SlabMesh, Texture2d, srgb8_to_linear,
 };
 use sheer_slab::{
     AllOrdersTable, DiffuseEnvironment, DiffuseTable, IrradianceConvention, SkyLight,
@@ -33,6 +33,9 @@ pub struct StageTimes {
     /// The part of `shading` from submitting the frame to the GPU until it has finished (uploads
     /// staged before are copied then); the rest of `shading` is CPU work.
     pub gpu: Duration,
+    /// The part of `gpu` before the draw: the shadow map's passes from the light (with the uploads and
+    /// the per-vertex table pass, when there is one), submitted on their own.
+    pub shadow: Duration,
     pub readback: Duration,
 }
 
@@ -325,6 +328,18 @@ pub fn sky_light(scene: &Scene) -> Result<Option<SkyLight>, CliError> {
     }))
 }
 
+/// The scene's translucent shadows (`shading.shadows`, `shading.shadow_resolution`), with the built-in
+/// diffuse table for the light scattered through a layer in front.
+pub fn shadows(scene: &Scene) -> Result<Option<Shadows>, CliError> {
+    if !scene.shading.shadows {
+        return Ok(None);
+    }
+    Ok(Some(Shadows {
+        resolution: scene.shading.shadow_resolution,
+        diffuse_table: Some(builtin_diffuse_table()?),
+    }))
+}
+
 /// Where the renderer's per-fragment path looks the all-orders table up (`shading.all_orders_lookup`).
 fn all_orders_sampling(scene: &Scene) -> sheer_slab::render::AllOrdersSampling {
     match scene.shading.all_orders_lookup {
@@ -449,6 +464,7 @@ impl FrameShading {
             scattering: scattering(scene)?,
             all_orders_sampling: all_orders_sampling(scene),
             sky: sky_light(scene)?,
+            shadows: shadows(scene)?,
         };
         validate_shading(&shading, scene)?;
         Ok(FrameShading {
@@ -479,6 +495,7 @@ impl FrameShading {
         if scene.environment != self.environment {
             shading.sky = sky_light(scene)?;
         }
+        shading.shadows = shadows(scene)?;
         validate_shading(&shading, scene)?;
         self.shading = shading;
         self.environment = scene.environment.clone();
@@ -577,10 +594,11 @@ impl FrameRenderer {
         let frames = self.shading.frames(flag)?;
         let gpu = self
             .renderer
-            .render_frames_timed(&frames)
+            .render_frames_staged(&frames)
             .map_err(|e| CliError::new(format!("render: {e}")))?;
         times.shading += start.elapsed();
-        times.gpu += gpu;
+        times.gpu += gpu.total();
+        times.shadow += gpu.before_draw;
         let start = Instant::now();
         let image = self
             .renderer

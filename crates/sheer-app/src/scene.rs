@@ -87,6 +87,11 @@ pub struct ShadingSection {
     pub baseline_alpha: f32,
     /// Display exposure: linear radiance × exposure before sRGB encoding.
     pub exposure: f32,
+    /// Translucent shadows: the light's beam attenuated by the cloth layers in front (and stopped by the
+    /// pole) on its way to each point.
+    pub shadows: bool,
+    /// The shadow map's texels per side (16–8192).
+    pub shadow_resolution: u32,
 }
 
 impl Default for ShadingSection {
@@ -105,6 +110,8 @@ impl Default for ShadingSection {
             convention: Convention::NormalToBeam,
             baseline_alpha: 0.2,
             exposure: 0.5,
+            shadows: true,
+            shadow_resolution: sheer_slab::render::DEFAULT_SHADOW_RESOLUTION,
         }
     }
 }
@@ -734,6 +741,12 @@ impl Scene {
             s.exposure,
             "must lie in (0, 1e6]",
         )?;
+        check(
+            (16..=8192).contains(&s.shadow_resolution),
+            "shading.shadow_resolution",
+            s.shadow_resolution,
+            "must lie in [16, 8192] texels",
+        )?;
         let l = &self.light;
         check(
             l.flux.is_finite() && (0.0..=MAX_FLUX_W).contains(&l.flux),
@@ -1124,6 +1137,10 @@ mod tests {
             ),
             ("[shading]\nbaseline_alpha = 2.0", "shading.baseline_alpha"),
             ("[shading]\nexposure = 0.0", "shading.exposure"),
+            (
+                "[shading]\nshadow_resolution = 8",
+                "shading.shadow_resolution",
+            ),
             ("[light]\nflux = -1.0", "light.flux"),
             ("[light]\nradius = 0.0", "light.radius"),
             ("[camera]\ntarget = [0.75, 0.25, 2.4]", "camera.target"),
@@ -1243,6 +1260,8 @@ mod key_tests {
         ("shading.all_orders_lookup", "\"vertex\""),
         ("shading.baseline_alpha", "0.5"),
         ("shading.exposure", "1.5"),
+        ("shading.shadows", "false"),
+        ("shading.shadow_resolution", "512"),
         ("light.flux", "125.0"),
         ("light.centre", "[0.5, 0.5, 0.25]"),
         ("light.radius", "2.5"),

@@ -8,12 +8,14 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::scene::{ShadingParams, SlabMesh, Texture2d};
+use super::shadow::{LightTransmission, ShadowCasters};
+use super::slab_renderer::OpaqueMesh;
 use crate::all_orders::{Scattering, multiple_scattered_radiance_per_albedo_rgb, table_tau_range};
 use crate::model::{
     Albedo, Cosine, LitSide, OpticalThickness, SlabParameterError, direct_transmission,
     single_scattered_reflected_radiance, single_scattered_transmitted_radiance,
 };
-use crate::sky::sky_radiance_per_albedo;
+use crate::sky::{diffuse_response_per_albedo, sky_radiance_per_albedo};
 
 /// Cosines below this are evaluated at this value, as in `shaders/thin_slab.wgsl` (grazing guard).
 pub const COSINE_FLOOR: f64 = 1e-6;
@@ -58,6 +60,29 @@ pub fn slab_values_at(
     albedo: [f64; 3],
     eye: DVec3,
     params: &ShadingParams,
+) -> Result<([f64; 3], [f64; 3]), SlabParameterError> {
+    slab_values_lit_by(
+        position,
+        normal,
+        tau,
+        albedo,
+        eye,
+        params,
+        &LightTransmission::UNSHADOWED,
+    )
+}
+
+/// [`slab_values_at`] with the point light's beam reaching the point through `light` (the layers in
+/// front of it, [`super::shadow`]): the beam's part times `light.direct`, plus with the all-orders model
+/// the slab's diffuse response to the isotropic radiance `μ0·E⊥·light.diffuse` on its lit face.
+pub fn slab_values_lit_by(
+    position: DVec3,
+    normal: DVec3,
+    tau: [f64; 3],
+    albedo: [f64; 3],
+    eye: DVec3,
+    params: &ShadingParams,
+    light: &LightTransmission,
 ) -> Result<([f64; 3], [f64; 3]), SlabParameterError> {
     let to_light = params.light_position.as_dvec3() - position;
     let (mu0, mu, lit) = lit_side_cosines(normal, to_light, eye - position);
@@ -119,7 +144,27 @@ pub fn slab_values_at(
         } else {
             single_scattered_transmitted_radiance(optical_thickness[channel], unit, cos_mu0, cos_mu)
         };
-        radiance[channel] += (single + multiple_per_albedo[channel]) * irradiance;
+        radiance[channel] +=
+            (single + multiple_per_albedo[channel]) * irradiance * light.direct[channel];
+    }
+    if let Some(table) = params.diffuse_through_table()
+        && mu0 > 0.0
+        && light.diffuse.iter().any(|d| *d > 0.0)
+    {
+        let spec = table.spec();
+        let (reflected, transmitted) = diffuse_response_per_albedo(
+            table,
+            tau.map(|t| t.clamp(spec.tau_min, spec.tau_max)),
+            albedo.map(|a| a.clamp(0.0, 1.0)),
+            cos_mu.get(),
+        )?;
+        // E⊥ = Φ/(4πr²) whatever the convention: the layer in front already weighted its flux by μ0.
+        let normal_irradiance =
+            f64::from(params.light_flux) / (4.0 * std::f64::consts::PI * to_light.length_squared());
+        for c in 0..3 {
+            let response = if lit { reflected[c] } else { transmitted[c] };
+            radiance[c] += response * light.diffuse[c] * (cos_mu0.get() * normal_irradiance);
+        }
     }
     Ok((radiance, transmittance))
 }
@@ -145,10 +190,17 @@ pub fn optical_thickness_at(params: &ShadingParams, uv: [f32; 2]) -> [f64; 3] {
 /// depend on the thread count). Errors only for parameters [`ShadingParams::validate`] refuses.
 pub fn per_vertex_slab_values(
     mesh: &SlabMesh,
+    opaque: &[OpaqueMesh],
     eye: Vec3,
     params: &ShadingParams,
 ) -> Result<Vec<VertexSlab>, SlabParameterError> {
     let eye = eye.as_dvec3();
+    // With shadows, the light reaching each vertex by ray casting (the GPU paths' reference).
+    let casters = params
+        .shadows
+        .as_ref()
+        .map(|shadows| ShadowCasters::new(mesh, opaque, params.light_position, shadows.resolution));
+    let diffuse_through = params.diffuse_through_table().map(|table| table.as_ref());
     // The all-orders multiple part and the sky's response are not linear in Λ: they need the vertex's Λ.
     let all_orders = matches!(params.scattering, Scattering::AllOrders(_)) || params.sky.is_some();
     (0..mesh.positions.len())
@@ -157,18 +209,25 @@ pub fn per_vertex_slab_values(
             let uv = mesh.uvs[vertex];
             let tau = optical_thickness_at(params, uv);
             // Single scattering is linear in Λ, applied per fragment: no need to sample Λ here.
-            let albedo = if all_orders {
+            let albedo = if all_orders || diffuse_through.is_some() {
                 albedo_at(params, uv)
             } else {
                 [1.0; 3]
             };
-            let (radiance, transmittance) = slab_values_at(
-                Vec3::from(mesh.positions[vertex]).as_dvec3(),
+            let position = Vec3::from(mesh.positions[vertex]).as_dvec3();
+            let light = casters
+                .as_ref()
+                .map_or(LightTransmission::UNSHADOWED, |casters| {
+                    casters.light_transmission(position, params, diffuse_through)
+                });
+            let (radiance, transmittance) = slab_values_lit_by(
+                position,
                 Vec3::from(mesh.normals[vertex]).as_dvec3(),
                 tau,
                 albedo,
                 eye,
                 params,
+                &light,
             )?;
             Ok(VertexSlab {
                 radiance_per_albedo: radiance.map(|v| v as f32),
@@ -340,7 +399,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| per_vertex_slab_values(&mesh, eye, &params).unwrap())
+                .install(|| per_vertex_slab_values(&mesh, &[], eye, &params).unwrap())
         };
         let single = run(1);
         assert_eq!(single, run(4));

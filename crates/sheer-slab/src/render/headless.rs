@@ -13,13 +13,31 @@ use super::slab_renderer::{
 };
 use super::{
     Background, Camera, EvaluationPath, LIT_SIDE, LinearImage, MODEL_CHECK, OUTPUT_SINGLE,
-    RenderError, SHADER_BODY, ShadingParams, SlabMesh, TargetFormat, extend_with_f16_texels,
-    extend_with_f32_texels, first_overflowed_channel, target_wgpu_format, validated,
+    RenderError, SHADER_BODY, SHADOW, ShadingParams, SlabMesh, TargetFormat,
+    extend_with_f16_texels, extend_with_f32_texels, first_overflowed_channel, target_wgpu_format,
+    validated,
 };
 use crate::all_orders::AllOrdersTable;
 
 /// The depth attachment's format: every adapter renders and multisamples it.
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// GPU time of one frame, from submitting each part until the GPU has finished it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuTimes {
+    /// The passes [`SlabRenderer::prepare`] records before the draw: the uploads staged with them, the
+    /// shadow map's peel passes, the per-vertex table pass.
+    pub before_draw: std::time::Duration,
+    /// The frame's draw: background, opaque geometry, marker, cloth.
+    pub draw: std::time::Duration,
+}
+
+impl GpuTimes {
+    /// Both parts.
+    pub fn total(&self) -> std::time::Duration {
+        self.before_draw + self.draw
+    }
+}
 
 /// A renderer without a window: renders into a linear float texture and reads it back.
 pub struct HeadlessRenderer {
@@ -300,32 +318,51 @@ impl HeadlessRenderer {
         &mut self,
         frames: &[SlabFrame<'_>],
     ) -> Result<std::time::Duration, RenderError> {
-        let mut encoder = self
+        self.render_frames_staged(frames).map(|times| times.total())
+    }
+
+    /// [`render_frames_timed`](Self::render_frames_timed) with the GPU time split in two: the passes
+    /// [`SlabRenderer::prepare`] records (uploads, the shadow map, the per-vertex table pass), submitted
+    /// and waited for on their own, then the frame's draw.
+    pub fn render_frames_staged(
+        &mut self,
+        frames: &[SlabFrame<'_>],
+    ) -> Result<GpuTimes, RenderError> {
+        let mut prepare = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame"),
+                label: Some("prepare"),
             });
         let draws = frames
             .iter()
             .map(|frame| {
                 self.renderer
-                    .prepare(&mut encoder, (self.width, self.height), frame)
+                    .prepare(&mut prepare, (self.width, self.height), frame)
             })
             .collect::<Result<Vec<SlabDraw>, RenderError>>()?;
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
         {
             let mut pass = self.target.begin_pass(&mut encoder);
             for draw in &draws {
                 self.renderer.paint(&mut pass, draw);
             }
         }
-        let submitted = std::time::Instant::now();
-        self.queue.submit([encoder.finish()]);
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|error| RenderError::Gpu(error.to_string()))?;
-        let gpu = submitted.elapsed();
+        let wait = |commands: wgpu::CommandBuffer| {
+            let submitted = std::time::Instant::now();
+            self.queue.submit([commands]);
+            self.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|error| RenderError::Gpu(error.to_string()))?;
+            Ok::<_, RenderError>(submitted.elapsed())
+        };
+        let before_draw = wait(prepare.finish())?;
+        let draw = wait(encoder.finish())?;
         self.take_uncaptured()?;
-        Ok(gpu)
+        Ok(GpuTimes { before_draw, draw })
     }
 
     /// Reads the last rendered frame back as linear radiance.
@@ -430,7 +467,7 @@ impl HeadlessRenderer {
         if inputs.is_empty() {
             return Ok(Vec::new());
         }
-        let source = format!("{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{MODEL_CHECK}");
+        let source = format!("{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{SHADOW}\n{MODEL_CHECK}");
         // With the frame's group 0: the same layout as the per-vertex all-orders pass (group 1 one
         // storage buffer in, one out); without: derived from the entry point.
         let layout = frame_bindings.map(|_| &self.renderer.compute_io_pipeline_layout);

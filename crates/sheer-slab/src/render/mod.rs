@@ -24,6 +24,7 @@
 mod cpu;
 mod headless;
 mod scene;
+mod shadow;
 mod slab_renderer;
 
 use thiserror::Error;
@@ -31,13 +32,17 @@ use thiserror::Error;
 pub use cpu::{
     COSINE_FLOOR, VertexSlab, albedo_at, f16_bits_to_f32, f32_to_f16_bits, lit_side_cosines,
     optical_thickness_at, per_vertex_slab_values, quantize_to_half, sample_bilinear,
-    sample_bilinear_red, slab_values_at, sort_back_to_front,
+    sample_bilinear_red, slab_values_at, slab_values_lit_by, sort_back_to_front,
 };
-pub use headless::HeadlessRenderer;
+pub use headless::{GpuTimes, HeadlessRenderer};
 pub use scene::{
     AllOrdersSampling, Background, Camera, CameraError, LinearImage, MeshError, ShadingError,
     ShadingParams, SlabMesh, Texture2d, linear_to_srgb, linear_to_srgb8, save_image_file,
     srgb8_to_linear, write_file_atomically,
+};
+pub use shadow::{
+    DEFAULT_SHADOW_RESOLUTION, LightTransmission, LightView, MAX_HALF_ANGLE_DEGREES,
+    SHADOW_DISTANCE_BIAS, SHADOW_LAYERS, SHADOW_SLOPE_TEXELS, ShadowCasters, Shadows,
 };
 pub use slab_renderer::{
     LightMarker, OpaqueMesh, SlabDraw, SlabFrame, SlabRenderer, SlabRendererOptions, SlabTarget,
@@ -52,6 +57,7 @@ const OUTPUT_SINGLE: &str = include_str!("../../../../shaders/slab_output_single
 const OUTPUT_DUAL: &str = include_str!("../../../../shaders/slab_output_dual.wgsl");
 const MODEL_CHECK: &str = include_str!("../../../../shaders/slab_model_check.wgsl");
 const MULTIPLE_AT_VERTEX: &str = include_str!("../../../../shaders/multiple_at_vertex.wgsl");
+const SHADOW: &str = include_str!("../../../../shaders/shadow.wgsl");
 
 /// Runs `create` inside a validation error scope, so that a shader or pipeline wgpu rejects becomes
 /// `RenderError::Gpu("{what}: {error}")` instead of an uncaptured error.

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 use thiserror::Error;
 
+use super::shadow::Shadows;
 use crate::all_orders::{Scattering, TABLE_RANGE_SLACK, table_tau_range};
 use crate::model::IrradianceConvention;
 use crate::sky::SkyLight;
@@ -456,6 +457,15 @@ pub enum ShadingError {
     /// An opaque mesh (a flag pole) that cannot be drawn: what is wrong with it.
     #[error("opaque mesh: {0}")]
     OpaqueMesh(String),
+    /// The shadow map needs at least 16 texels per side.
+    #[error("shadow map resolution {0} must be at least 16 texels")]
+    ShadowResolution(u32),
+    /// Shadows with the all-orders model need a diffuse table (for the light scattered through a layer).
+    #[error("shadows with the all-orders model need a diffuse table (shadows or sky light)")]
+    ShadowDiffuseTable,
+    /// The sky's and the shadows' diffuse tables must be the same table (the shader binds one).
+    #[error("the sky light and the shadows have different diffuse tables")]
+    DiffuseTables,
     /// The light marker's radius must be finite and > 0, its radiance finite and ≥ 0.
     #[error("light marker of radius {radius_pixels} px and radiance {radiance:?} W/(m²·sr)")]
     LightMarker {
@@ -495,6 +505,9 @@ pub struct ShadingParams {
     pub all_orders_sampling: AllOrdersSampling,
     /// Daylight on both faces ([`crate::sky`]), or none (the paper's scene: the point light alone).
     pub sky: Option<SkyLight>,
+    /// Translucent shadows of the point light ([`super::shadow`]), or none (the paper: every point gets
+    /// the whole beam).
+    pub shadows: Option<Shadows>,
 }
 
 /// Where [`EvaluationPath::PerFragment`](super::EvaluationPath::PerFragment) looks the all-orders table
@@ -547,6 +560,7 @@ impl ShadingParams {
             scattering: Scattering::Single,
             all_orders_sampling: AllOrdersSampling::default(),
             sky: None,
+            shadows: None,
         };
         params.validate()?;
         Ok(params)
@@ -619,7 +633,44 @@ impl ShadingParams {
                 return Err(ShadingError::TableAxes);
             }
         }
+        if let Some(shadows) = &self.shadows {
+            shadows.validate()?;
+            if let (Some(sky), Some(table)) = (&self.sky, &shadows.diffuse_table)
+                && !(Arc::ptr_eq(&sky.table, table) || sky.table == *table)
+            {
+                return Err(ShadingError::DiffuseTables);
+            }
+            if let Some(table) = &shadows.diffuse_table {
+                let spec = table.spec();
+                self.validate_table_range((spec.tau_min, spec.tau_max))?;
+                if let Scattering::AllOrders(all_orders) = &self.scattering
+                    && all_orders.spec() != spec
+                {
+                    return Err(ShadingError::TableAxes);
+                }
+            }
+            if matches!(self.scattering, Scattering::AllOrders(_)) && self.diffuse_table().is_none()
+            {
+                return Err(ShadingError::ShadowDiffuseTable);
+            }
+        }
         Ok(())
+    }
+
+    /// The diffuse table the renderer binds: the sky's, else the shadows' (validation makes them one).
+    pub fn diffuse_table(&self) -> Option<&Arc<crate::sky::DiffuseTable>> {
+        self.sky.as_ref().map(|sky| &sky.table).or(self
+            .shadows
+            .as_ref()
+            .and_then(|shadows| shadows.diffuse_table.as_ref()))
+    }
+
+    /// The diffuse table the light scattered through a layer uses: with shadows and the all-orders model.
+    pub fn diffuse_through_table(&self) -> Option<&Arc<crate::sky::DiffuseTable>> {
+        match (&self.shadows, &self.scattering) {
+            (Some(_), Scattering::AllOrders(_)) => self.diffuse_table(),
+            _ => None,
+        }
     }
 
     /// Every τ1 the renderer can meet (τ1 per channel times the half-float thickness texels, which

@@ -9,6 +9,9 @@
 //! Draw order inside the pass: background (no depth), opaque meshes and the light marker (depth test and
 //! write), cloth (depth test, no write). With a depth attachment an opaque pole hides the cloth behind it
 //! and is seen through the cloth in front of it.
+//!
+//! With [`ShadingParams::shadows`], `prepare` first encodes the shadow map's depth-peeling passes from the
+//! light into the caller's encoder (render passes into the renderer's own textures; [`super::shadow`]).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -16,10 +19,12 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::shadow::{LightView, SHADOW_DISTANCE_BIAS, SHADOW_LAYERS, SHADOW_SLOPE_TEXELS};
 use super::{
     AllOrdersSampling, Background, Camera, EvaluationPath, LIT_SIDE, MULTIPLE_AT_VERTEX,
-    OUTPUT_DUAL, OUTPUT_SINGLE, RenderError, SHADER_BODY, ShadingError, ShadingParams, SlabMesh,
-    Texture2d, VertexSlab, f32_to_f16_bits, per_vertex_slab_values, sort_back_to_front, validated,
+    OUTPUT_DUAL, OUTPUT_SINGLE, RenderError, SHADER_BODY, SHADOW, ShadingError, ShadingParams,
+    SlabMesh, Texture2d, VertexSlab, f32_to_f16_bits, per_vertex_slab_values, sort_back_to_front,
+    validated,
 };
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};
 use crate::model::IrradianceConvention;
@@ -340,6 +345,7 @@ struct PipelineKey {
     all_orders: bool,
     multiple_at_vertex: bool,
     sky: bool,
+    shadows: bool,
 }
 
 impl PipelineKey {
@@ -348,16 +354,45 @@ impl PipelineKey {
     /// sampled only when there is one (a software rasteriser would otherwise pay for the masked-off
     /// sample); the all-orders lookup exists only in all-orders pipelines, so single scattering runs
     /// exactly the code it ran before.
-    fn override_constants(self) -> [(&'static str, f64); 4] {
-        let flag = |on: bool| if on { 1.0 } else { 0.0 };
+    fn override_constants(self) -> [(&'static str, f64); 5] {
         [
             ("per_channel_thickness", flag(self.dual)),
             ("has_thickness_texture", flag(self.thickness)),
             ("all_orders", flag(self.all_orders)),
             ("sky_light", flag(self.sky)),
+            ("shadows", flag(self.shadows)),
         ]
     }
 }
+
+/// An override constant's value for a flag.
+fn flag(on: bool) -> f64 {
+    if on { 1.0 } else { 0.0 }
+}
+
+/// A shadow-map peeling pipeline: first layer or not, cloth or opaque, and for the cloth what its
+/// fragments sample (per-channel τ1, thickness texture, the diffuse part).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PeelKey {
+    first: bool,
+    opaque: bool,
+    per_channel: bool,
+    thickness: bool,
+    diffuse: bool,
+}
+
+/// The shadow map: one `Rgba32Uint` texture per layer (`shaders/shadow.wgsl` gives the packing) and the
+/// depth buffer its passes share.
+struct ShadowMaps {
+    resolution: u32,
+    layers: Vec<wgpu::TextureView>,
+    depth: wgpu::TextureView,
+    /// Group 1 of peel pass k: layer k − 1 (pass 0: the empty stand-in).
+    previous: Vec<wgpu::BindGroup>,
+}
+
+/// An empty shadow-map texel: no surface (distance 3e38 m, as f32 bits).
+const EMPTY_SHADOW_TEXEL: [u32; 4] = [0x7f61_b1e6, 0, 0, 0];
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -375,6 +410,10 @@ struct FrameUniform {
     output: [f32; 4],
     /// The light marker's radiance.
     marker: [f32; 4],
+    /// The shadow map's view and projection from the light.
+    shadow_view_projection: [[f32; 4]; 4],
+    /// Resolution (texels), slope bias per metre of distance, distance bias per metre, unused.
+    shadow: [f32; 4],
 }
 
 #[repr(C)]
@@ -453,6 +492,13 @@ pub struct SlabRenderer {
     background_pipeline: wgpu::RenderPipeline,
     opaque_pipeline: wgpu::RenderPipeline,
     marker_pipeline: wgpu::RenderPipeline,
+    /// Group 1 of the shadow map's peel passes (the previous layer) and their layout.
+    peel_layout: wgpu::BindGroupLayout,
+    peel_pipeline_layout: wgpu::PipelineLayout,
+    peel_pipelines: HashMap<PeelKey, wgpu::RenderPipeline>,
+    /// A 1×1 empty shadow-map layer, bound wherever no shadow map is (no shadows, the peel passes).
+    empty_shadow: wgpu::TextureView,
+    shadow_maps: Option<ShadowMaps>,
     albedo: GpuTexture,
     thickness: GpuTexture,
     background: GpuTexture,
@@ -518,6 +564,17 @@ impl SlabRenderer {
             },
             count: None,
         };
+        // A shadow-map layer (shadow.wgsl), read with textureLoad.
+        let shadow_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: all_stages,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Uint,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("slab bindings"),
             entries: &[
@@ -544,6 +601,8 @@ impl SlabRenderer {
                 table_entry(5),
                 table_entry(6),
                 table_entry(8),
+                shadow_entry(9),
+                shadow_entry(10),
                 wgpu::BindGroupLayoutEntry {
                     binding: 7,
                     visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
@@ -581,6 +640,34 @@ impl SlabRenderer {
                 bind_group_layouts: &[Some(&bind_group_layout), Some(&compute_io_layout)],
                 immediate_size: 0,
             });
+        let peel_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow peel previous layer"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ..shadow_entry(2)
+            }],
+        });
+        let peel_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shadow peel"),
+            bind_group_layouts: &[Some(&bind_group_layout), Some(&peel_layout)],
+            immediate_size: 0,
+        });
+        let empty_shadow = shadow_layer_texture(&device, 1, "empty shadow layer");
+        queue.write_texture(
+            empty_shadow.as_image_copy(),
+            bytemuck::cast_slice(&EMPTY_SHADOW_TEXEL),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(16),
+                rows_per_image: Some(1),
+            },
+            wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+        );
+        let empty_shadow = empty_shadow.create_view(&Default::default());
         let white = Texture2d::uniform([1.0; 4])?;
         let albedo =
             Self::upload_texture(&device, &queue, &white, wgpu::TextureFormat::Rgba16Float);
@@ -622,6 +709,11 @@ impl SlabRenderer {
             background_pipeline: fixed.background,
             opaque_pipeline: fixed.opaque,
             marker_pipeline: fixed.marker,
+            peel_layout,
+            peel_pipeline_layout,
+            peel_pipelines: HashMap::new(),
+            empty_shadow,
+            shadow_maps: None,
             albedo,
             thickness,
             background,
@@ -708,14 +800,50 @@ impl SlabRenderer {
             (Scattering::Single, Some(sky)) => self.update_axes(&sky.table)?,
             (Scattering::Single, None) => {}
         }
-        if let Some(sky) = &shading.sky {
-            self.update_diffuse(&sky.table)?;
+        if let Some(table) = shading.diffuse_table() {
+            self.update_diffuse(table)?;
         }
-        let uniform = self.frame_uniform(frame, target_size);
+        // The baseline is the paper's comparison as published: no shadows; the CPU path casts rays.
+        let shadow_view = match &shading.shadows {
+            Some(shadows)
+                if matches!(
+                    path,
+                    EvaluationPath::PerFragment | EvaluationPath::PerVertex
+                ) =>
+            {
+                if shadows.resolution > max {
+                    return Err(RenderError::TextureTooLarge {
+                        texture: "shadow map",
+                        width: shadows.resolution,
+                        height: shadows.resolution,
+                        max,
+                    });
+                }
+                LightView::covering(
+                    shading.light_position,
+                    mesh.positions.iter().copied(),
+                    shadows.resolution,
+                )
+                .map(|view| (view, shadows.resolution))
+            }
+            _ => None,
+        };
+        let uniform = self.frame_uniform(frame, target_size, shadow_view);
         self.queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
-        self.upload_mesh(mesh, camera, shading, path)?;
+        self.upload_mesh(mesh, frame.opaque, camera, shading, path)?;
         let opaque_index_count = self.upload_opaque(frame.opaque);
+        if let Some((_, resolution)) = shadow_view {
+            let peel = PeelKey {
+                first: true,
+                opaque: false,
+                per_channel: dual,
+                thickness: shading.thickness_texture.is_some(),
+                diffuse: shading.diffuse_through_table().is_some(),
+            };
+            let counts = (mesh.indices.len() as u32, opaque_index_count);
+            self.encode_shadow_passes(encoder, peel, resolution, counts)?;
+        }
         let key = PipelineKey {
             path,
             dual,
@@ -732,9 +860,10 @@ impl SlabRenderer {
                     path,
                     EvaluationPath::PerFragment | EvaluationPath::PerVertex
                 ),
+            shadows: shadow_view.is_some(),
         };
         self.pipeline(key)?;
-        let bind_group = self.bind_group();
+        let bind_group = self.bind_group_with_shadows(key.shadows);
         if key.multiple_at_vertex {
             self.encode_multiple_at_vertex(encoder, &bind_group, key, mesh.positions.len())?;
         }
@@ -800,6 +929,205 @@ impl SlabRenderer {
         }
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..draw.index_count, 0, 0..1);
+    }
+
+    /// Encodes the shadow map's [`SHADOW_LAYERS`] peeling passes from the light (`shaders/shadow.wgsl`):
+    /// pass k draws the cloth and the opaque meshes and keeps, per texel, the nearest surface behind
+    /// layer k − 1. `peel` gives the cloth's variant (its `first` and `opaque` are set here).
+    fn encode_shadow_passes(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        peel: PeelKey,
+        resolution: u32,
+        (cloth_index_count, opaque_index_count): (u32, u32),
+    ) -> Result<(), RenderError> {
+        if self.shadow_maps.as_ref().map(|m| m.resolution) != Some(resolution) {
+            let layers: Vec<wgpu::TextureView> = (0..SHADOW_LAYERS)
+                .map(|_| {
+                    shadow_layer_texture(&self.device, resolution, "shadow map layer")
+                        .create_view(&Default::default())
+                })
+                .collect();
+            let depth = self
+                .device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("shadow map depth"),
+                    size: wgpu::Extent3d {
+                        width: resolution,
+                        height: resolution,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::Depth32Float,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default());
+            let previous = std::iter::once(&self.empty_shadow)
+                .chain(layers.iter().take(SHADOW_LAYERS - 1))
+                .map(|view| {
+                    self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("shadow peel previous layer"),
+                        layout: &self.peel_layout,
+                        entries: &[wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(view),
+                        }],
+                    })
+                })
+                .collect();
+            self.shadow_maps = Some(ShadowMaps {
+                resolution,
+                layers,
+                depth,
+                previous,
+            });
+        }
+        let variants = [false, true].map(|first| {
+            [false, true].map(|opaque| PeelKey {
+                first,
+                opaque,
+                ..peel
+            })
+        });
+        for key in variants.iter().flatten() {
+            self.peel_pipeline(*key)?;
+        }
+        // The peel passes' group 0 binds the empty stand-in where the layers go: they are the targets.
+        let frame_bindings = self.bind_group_with_shadows(false);
+        let Some(maps) = &self.shadow_maps else {
+            return Ok(());
+        };
+        let [empty, a, b, c] = EMPTY_SHADOW_TEXEL.map(f64::from);
+        for (k, layer) in maps.layers.iter().enumerate() {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map layer"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: layer,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: empty,
+                            g: a,
+                            b,
+                            a: c,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &maps.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &frame_bindings, &[]);
+            pass.set_bind_group(1, &maps.previous[k], &[]);
+            let first = k == 0;
+            if let (Some((vertices, _)), Some((indices, _))) =
+                (&self.vertex_buffer, &self.index_buffer)
+                && cloth_index_count > 0
+            {
+                pass.set_pipeline(&self.peel_pipelines[&variants[usize::from(first)][0]]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..cloth_index_count, 0, 0..1);
+            }
+            if let (Some((vertices, _)), Some((indices, _))) =
+                (&self.opaque_vertex_buffer, &self.opaque_index_buffer)
+                && opaque_index_count > 0
+            {
+                pass.set_pipeline(&self.peel_pipelines[&variants[usize::from(first)][1]]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..opaque_index_count, 0, 0..1);
+            }
+        }
+        Ok(())
+    }
+
+    /// Creates the peel pipeline `key` unless it exists.
+    fn peel_pipeline(&mut self, key: PeelKey) -> Result<(), RenderError> {
+        if self.peel_pipelines.contains_key(&key) {
+            return Ok(());
+        }
+        let module = self.module(false)?;
+        let cloth_attributes =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+        let opaque_attributes =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+        let (entry_points, stride, attributes) = if key.opaque {
+            (
+                ("vs_peel_opaque", "fs_peel_opaque"),
+                std::mem::size_of::<OpaqueVertex>(),
+                &opaque_attributes[..],
+            )
+        } else {
+            (
+                ("vs_peel_cloth", "fs_peel_cloth"),
+                std::mem::size_of::<Vertex>(),
+                &cloth_attributes[..],
+            )
+        };
+        let constants = [
+            ("first_layer", flag(key.first)),
+            ("per_channel_thickness", flag(key.per_channel)),
+            ("has_thickness_texture", flag(key.thickness)),
+            ("diffuse_through", flag(key.diffuse)),
+            // Λ is sampled at the vertex level only where the all-orders switch says so.
+            ("all_orders", flag(key.diffuse)),
+        ];
+        let options = wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        };
+        let pipeline = validated(&self.device, "shadow peel pipeline", || {
+            self.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("shadow peel"),
+                    layout: Some(&self.peel_pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(entry_points.0),
+                        compilation_options: options.clone(),
+                        buffers: &[Some(wgpu::VertexBufferLayout {
+                            array_stride: stride as u64,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes,
+                        })],
+                    },
+                    // Both faces cast shadows.
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: depth_state(Some(wgpu::TextureFormat::Depth32Float), true),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry_points.1),
+                        compilation_options: options.clone(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: wgpu::TextureFormat::Rgba32Uint,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })?;
+        self.peel_pipelines.insert(key, pipeline);
+        Ok(())
     }
 
     fn encode_multiple_at_vertex(
@@ -869,7 +1197,12 @@ impl SlabRenderer {
         Ok(())
     }
 
-    fn frame_uniform(&self, frame: &SlabFrame<'_>, (width, height): (u32, u32)) -> FrameUniform {
+    fn frame_uniform(
+        &self,
+        frame: &SlabFrame<'_>,
+        (width, height): (u32, u32),
+        shadow_view: Option<(LightView, u32)>,
+    ) -> FrameUniform {
         let SlabFrame {
             camera,
             shading,
@@ -927,6 +1260,17 @@ impl SlabRenderer {
                 marker.radius_pixels,
             ],
             marker: [m0, m1, m2, 0.0],
+            shadow_view_projection: shadow_view
+                .map_or(glam::Mat4::IDENTITY, |(view, _)| view.view_projection)
+                .to_cols_array_2d(),
+            shadow: shadow_view.map_or([0.0; 4], |(view, resolution)| {
+                [
+                    resolution as f32,
+                    SHADOW_SLOPE_TEXELS * view.texel_per_metre,
+                    SHADOW_DISTANCE_BIAS,
+                    0.0,
+                ]
+            }),
         }
     }
 
@@ -1000,13 +1344,23 @@ impl SlabRenderer {
         Ok(())
     }
 
+    /// Group 0 without a shadow map (the empty stand-in in its place).
     pub(crate) fn bind_group(&self) -> wgpu::BindGroup {
+        self.bind_group_with_shadows(false)
+    }
+
+    /// Group 0, with the shadow map's layers if `shadows` (and one exists).
+    fn bind_group_with_shadows(&self, shadows: bool) -> wgpu::BindGroup {
         fn texture(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
             wgpu::BindGroupEntry {
                 binding,
                 resource: wgpu::BindingResource::TextureView(view),
             }
         }
+        let layer = |k: usize| match &self.shadow_maps {
+            Some(maps) if shadows => &maps.layers[k],
+            _ => &self.empty_shadow,
+        };
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("slab bind group"),
             layout: &self.bind_group_layout,
@@ -1025,6 +1379,8 @@ impl SlabRenderer {
                 texture(5, &self.table.cells_view),
                 texture(6, &self.table.warp_view),
                 texture(8, &self.diffuse.view),
+                texture(9, layer(0)),
+                texture(10, layer(1)),
                 wgpu::BindGroupEntry {
                     binding: 7,
                     resource: self.table.axes.as_entire_binding(),
@@ -1265,6 +1621,7 @@ impl SlabRenderer {
     fn upload_mesh(
         &mut self,
         mesh: &SlabMesh,
+        opaque: &[OpaqueMesh],
         camera: &Camera,
         shading: &ShadingParams,
         path: EvaluationPath,
@@ -1297,7 +1654,7 @@ impl SlabRenderer {
         );
         self.sorted_indices = indices;
         if path == EvaluationPath::Cpu {
-            let values = per_vertex_slab_values(mesh, camera.eye, shading)?;
+            let values = per_vertex_slab_values(mesh, opaque, camera.eye, shading)?;
             Self::write_buffer(
                 &self.device,
                 &self.queue,
@@ -1487,10 +1844,11 @@ impl std::fmt::Debug for SlabRenderer {
 /// model and the per-vertex all-orders pass.
 fn shader_module(device: &wgpu::Device, dual: bool) -> Result<wgpu::ShaderModule, RenderError> {
     let source = format!(
-        "{}\n{}\n{}\n{}",
+        "{}\n{}\n{}\n{}\n{}",
         if dual { OUTPUT_DUAL } else { OUTPUT_SINGLE },
         LIT_SIDE,
         SHADER_BODY,
+        SHADOW,
         MULTIPLE_AT_VERTEX
     );
     validated(device, "shader", || {
@@ -1502,6 +1860,27 @@ fn shader_module(device: &wgpu::Device, dual: bool) -> Result<wgpu::ShaderModule
             }),
             source: wgpu::ShaderSource::Wgsl(source.into()),
         })
+    })
+}
+
+/// A shadow-map layer texture (`Rgba32Uint`, square): a render target of the peel passes, read by the
+/// lookup.
+fn shadow_layer_texture(device: &wgpu::Device, resolution: u32, label: &str) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: resolution,
+            height: resolution,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Uint,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
     })
 }
 
