@@ -499,6 +499,13 @@ impl SheerApp {
                         shading_changed |= s.all_orders_lookup != before;
                     });
                 }
+                shading_changed |= ui
+                    .checkbox(&mut s.shadows, "translucent shadows")
+                    .on_hover_text(
+                        "the light reaching each point through the cloth layers in front of it \
+                         and past the pole",
+                    )
+                    .changed();
                 if let Some(v) = self.fields.optical_thickness.show(ui, in_range(1e-3, 50.0)) {
                     s.optical_thickness = [v as f32; 3];
                     shading_changed = true;
