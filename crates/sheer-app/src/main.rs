@@ -39,6 +39,7 @@ pub(crate) use outln;
 pub struct CliError(String);
 
 impl CliError {
+    /// An error the program reports as `error: {message}`, on one line (newlines become spaces).
     pub fn new(message: impl Into<String>) -> Self {
         CliError(message.into())
     }

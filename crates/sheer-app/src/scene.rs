@@ -417,7 +417,7 @@ fn check_silent_conversions(text: &str, scene: &Scene) -> Result<(), CliError> {
 
 fn compare_tables(
     text: &str,
-    file: &toml::de::DeTable,
+    file: &toml::de::DeTable<'_>,
     read: &toml::Table,
     prefix: &str,
 ) -> Result<(), CliError> {

@@ -73,7 +73,7 @@ impl Sequence<'_> {
 /// written, with an error that says which frames are complete; so does any failure.
 pub fn run_sequence(
     flag: &mut FlagScene,
-    sequence: &Sequence,
+    sequence: &Sequence<'_>,
     times: &mut StageTimes,
     mut write_frame: impl FnMut(&FlagScene, u32, &mut StageTimes) -> Result<(), CliError>,
 ) -> Result<(), CliError> {

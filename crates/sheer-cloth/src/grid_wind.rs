@@ -206,7 +206,7 @@ pub(crate) fn add_grid_triangle_forces(
     shares: &[DVec3],
     forces: &mut [DVec3],
     parallel: bool,
-    body: Option<&BodyForce>,
+    body: Option<&BodyForce<'_>>,
 ) {
     let columns = shape.columns;
     assert_eq!(forces.len(), columns * shape.rows);

@@ -14,16 +14,23 @@ use crate::error::ModelError;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SpringKind {
+    /// Along the cloth's edges: grid neighbours in a row or column, or a mesh's triangle edges.
     Stretch,
+    /// Across a grid cell's diagonals, resisting in-plane shearing (grids only).
     Shear,
+    /// Skipping one particle on a grid, or joining the far corners of two triangles that share an
+    /// edge on a mesh: resists folding.
     Bend,
 }
 
 /// A spring (or distance constraint) between particles `a` and `b`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spring {
+    /// Index of the first end's particle.
     pub a: u32,
+    /// Index of the second end's particle.
     pub b: u32,
+    /// The family, whose [`SpringParams`](crate::SpringParams) set its stiffness and damping.
     pub kind: SpringKind,
     /// Rest length, m.
     pub rest_length: f64,
@@ -66,7 +73,9 @@ impl Default for GridSpec {
 /// Grid shape of a cloth built by [`ClothModel::grid`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct GridShape {
+    /// Particles per row (W).
     pub columns: usize,
+    /// Particles per column (H).
     pub rows: usize,
 }
 
@@ -139,6 +148,7 @@ pub struct ClothModel {
     pub masses: Vec<f64>,
     /// Triangles (for wind and rendering), counter-clockwise seen from +z on grids.
     pub triangles: Vec<[u32; 3]>,
+    /// The springs of every family (distance constraints for the position-based methods).
     pub springs: Vec<Spring>,
     /// Pinned particles follow their pin targets instead of the dynamics.
     pub pinned: Vec<bool>,

@@ -64,6 +64,7 @@ struct Pass {
 // SAFETY: `pass` is written only by the leader while no helper reads it (see the field's comment), and
 // the closure it points to is `Sync`; the rest is atomics and locks.
 unsafe impl Sync for Team {}
+// SAFETY: as for `Sync`: the team's state is atomics, locks and the leader-owned `pass`.
 unsafe impl Send for Team {}
 
 thread_local! {
@@ -134,10 +135,10 @@ impl Team {
     /// Thread `index`'s share of `pass`: its own part of a short pass, chunks claimed until none is left
     /// of a long one.
     fn work_on(&self, pass: Pass, index: usize) {
-        // SAFETY (both calls): the leader keeps `work` alive until every thread has finished the pass.
         if pass.chunk == 0 {
             let range = part(pass.len, self.threads, index);
             if !range.is_empty() {
+                // SAFETY: the leader keeps `work` alive until every thread has finished the pass.
                 unsafe { (*pass.work)(range) }
             }
             return;
@@ -147,6 +148,7 @@ impl Team {
             if start >= pass.len {
                 return;
             }
+            // SAFETY: the leader keeps `work` alive until every thread has finished the pass.
             unsafe { (*pass.work)(start..(start + pass.chunk).min(pass.len)) }
         }
     }
@@ -558,6 +560,7 @@ pub(crate) struct DisjointSlice<'a, T> {
 // SAFETY: access goes through `get`/`set`, whose callers guarantee that no index is touched by two threads
 // at once (the colouring invariant, checked when the colouring is built).
 unsafe impl<T: Send> Send for DisjointSlice<'_, T> {}
+// SAFETY: as for `Send`: shared access is only through `get`/`set` on indices no other thread touches.
 unsafe impl<T: Send> Sync for DisjointSlice<'_, T> {}
 
 impl<'a, T: Copy> DisjointSlice<'a, T> {

@@ -21,14 +21,24 @@ use crate::error::ParamError;
 pub enum Method {
     /// Forward Euler: `x' = x + h v`, `v' = v + h a(x, v)`. Unconditionally unstable without damping
     /// (its amplification factor is `sqrt(1 + (ωh)²) > 1`); shipped as the baseline that fails.
-    ExplicitEuler { substeps: u32 },
+    ExplicitEuler {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
+        substeps: u32,
+    },
     /// Semi-implicit (symplectic) Euler: `v' = v + h a(x, v)`, `x' = x + h v'`. Stable for `h < 2/ω`.
-    SymplecticEuler { substeps: u32 },
+    SymplecticEuler {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
+        substeps: u32,
+    },
     /// Velocity Verlet (Swope et al. 1982), second order, symplectic. Stable for `h < 2/ω`.
-    Verlet { substeps: u32 },
+    Verlet {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
+        substeps: u32,
+    },
     /// Backward Euler linearised once per step and solved by preconditioned conjugate gradients
     /// (Baraff & Witkin 1998, "Large steps in cloth simulation", eqs. (15)–(18)).
     ImplicitEuler {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
         substeps: u32,
         /// Upper bound on CG iterations per solve.
         cg_max_iterations: u32,
@@ -38,16 +48,26 @@ pub enum Method {
     /// Position-based dynamics (Müller et al. 2007): dimensionless stiffness in (0, 1], corrected for
     /// the iteration count by `1 − (1 − k)^(1/n)` (their section 3.3).
     Pbd {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
         substeps: u32,
+        /// Gauss–Seidel sweeps over all constraints per sub-step.
         iterations: u32,
         /// Dimensionless PBD stiffness in (0, 1]; the spring stiffnesses in N/m are not used.
         stiffness: f64,
     },
     /// Extended PBD (Macklin, Müller, Chentanez 2016): compliance `α = 1/k` in m/N taken from the
-    /// springs, Lagrange multipliers reset every step, `iterations` Gauss–Seidel sweeps per step.
-    Xpbd { substeps: u32, iterations: u32 },
+    /// springs, Lagrange multipliers reset every sub-step, `iterations` Gauss–Seidel sweeps per sub-step.
+    Xpbd {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
+        substeps: u32,
+        /// Gauss–Seidel sweeps over all constraints per sub-step.
+        iterations: u32,
+    },
     /// "Small steps" XPBD (Macklin et al. 2019): `substeps` sub-steps of one XPBD iteration each.
-    SmallStepsXpbd { substeps: u32 },
+    SmallStepsXpbd {
+        /// Sub-steps per [`step`](crate::Simulation::step)`(dt)`, each `dt / substeps` s long.
+        substeps: u32,
+    },
 }
 
 /// The kinds of [`Method`], as a table's `kind` names them.
@@ -554,6 +574,7 @@ impl Default for DivergenceLimits {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimParams {
+    /// The integrator and its sub-step and iteration counts.
     pub method: Method,
     /// Springs along the mesh edges (grid rows and columns).
     pub stretch: SpringParams,
@@ -565,6 +586,7 @@ pub struct SimParams {
     pub gravity: DVec3,
     /// Linear air damping of absolute velocity, 1/s (`f = −m c v`).
     pub air_damping: f64,
+    /// The wind on the cloth's triangles (a grid or mesh; springs-only models feel none).
     pub wind: Wind,
     /// Position-based methods only: long-range attachments (Kim, Chentanez & Müller 2012, "Long Range
     /// Attachments — A Method to Simulate Inextensible Clothing in Computer Games"). Each free particle
@@ -574,6 +596,7 @@ pub struct SimParams {
     /// default flag released in still air: a 99th-percentile stretch strain of at most 0.021 with them,
     /// 0.119 without; `examples/hanging_stretch.rs`).
     pub long_range_attachments: bool,
+    /// When a step counts as diverged and is undone ([`StepError::Diverged`](crate::StepError::Diverged)).
     pub divergence: DivergenceLimits,
     /// Below this many particles every pass runs on one thread. From it, the passes run on rayon's
     /// pool, or, for the position-based methods on a grid, on a team of as many threads as rayon's

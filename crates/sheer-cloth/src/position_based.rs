@@ -408,10 +408,11 @@ impl<'a> Tethers<'a> {
             i = self.run_ends[i] as usize;
             runs += 1;
         }
-        // SAFETY (both): by the caller's contract.
         if runs <= most {
+            // SAFETY: by the caller's contract, which is `apply_by_runs`'s.
             unsafe { self.apply_by_runs(range, positions) }
         } else {
+            // SAFETY: by the caller's contract, which is `apply_by_copies`'s.
             unsafe { self.apply_by_copies(range, positions) }
         }
     }
@@ -490,11 +491,12 @@ unsafe fn end_sweep(
     positions: &DisjointXyz<'_>,
     previous: &DisjointXyz<'_>,
 ) {
-    // SAFETY (both blocks): by the caller's contract.
     if let Some(tethers) = tethers {
+        // SAFETY: by the caller's contract, which includes `Tethers::apply`'s.
         unsafe { tethers.apply(range.clone(), positions) };
     }
     if let Some((velocities, inverse_h)) = velocities {
+        // SAFETY: by the caller's contract, `range` of all three buffers is this thread's alone.
         unsafe {
             velocities_from_positions(
                 inverse_h,
@@ -829,7 +831,7 @@ impl Simulation {
             let last = iteration + 1 == iterations;
             let velocities = last.then_some((&velocities, 1.0 / h));
             if tethers.is_some() || last {
-                // SAFETY (both): no pass is running.
+                // SAFETY: no pass is running, so no other thread touches `positions`.
                 split_positions.split_from(unsafe { positions.slice(0..particle_count) });
                 let split = split_positions.disjoint();
                 parts(particle_count, parallel, PARTICLE_GRAIN, |range| {
@@ -837,6 +839,7 @@ impl Simulation {
                     unsafe { end_sweep(range, tethers.as_ref(), velocities, &split, &previous) }
                 });
                 if !last {
+                    // SAFETY: the pass above has finished; no other thread touches `positions`.
                     split_positions.join_into(unsafe { positions.slice_mut(0..particle_count) });
                 }
             }
@@ -1203,20 +1206,20 @@ impl Simulation {
             )
         });
         let tethers_of = |substep: usize| tethers[substep % 2].as_ref();
-        // SAFETY (callers): the strips of a batch touch disjoint particle ranges (checked by the
-        // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
-        // touch no row at once that another part touches (`Pipeline`), the wavefront's concurrent
-        // parts and seams touch disjoint rows (`Wavefront::fits`), a chain's links touch a row
-        // only after the earlier links are done with it (`Wavefront::run_link`), and two opposed
-        // parts touch a row at once only with units of the same item, which write nothing in common
-        // (a batch's strips share no particle, as in a pass over them; two cell rows of the wind only
-        // read the particle row between them) (`Wavefront::run_opposed_part`); each strip owns its
-        // constraints' multipliers.
         let project_these = |strips: &[Strip]| {
             // A batch holds one family.
             if strips.iter().all(|s| !active[family_index(s.kind)]) {
                 return;
             }
+            // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
+            // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
+            // touch no row at once that another part touches (`Pipeline`), the wavefront's concurrent
+            // parts and seams touch disjoint rows (`Wavefront::fits`), a chain's links touch a row
+            // only after the earlier links are done with it (`Wavefront::run_link`), and two opposed
+            // parts touch a row at once only with units of the same item, which write nothing in common
+            // (a batch's strips share no particle, as in a pass over them; two cell rows of the wind
+            // only read the particle row between them) (`Wavefront::run_opposed_part`); each strip owns
+            // its constraints' multipliers.
             unsafe {
                 project_strips::<PBD, MULTIPLIERS>(
                     strips,
@@ -2902,9 +2905,11 @@ mod tether_tests {
                 how(&tethers, &mut x);
                 x.to_vec3s()
             };
-            // SAFETY (all three): one thread, and nothing writes the pins' positions.
+            // SAFETY: one thread, and nothing writes the pins' positions.
             let by_runs = moved(&|t, x| unsafe { t.apply_by_runs(3..n, &x.disjoint()) });
+            // SAFETY: as above.
             let by_copies = moved(&|t, x| unsafe { t.apply_by_copies(3..n, &x.disjoint()) });
+            // SAFETY: as above.
             let chosen = moved(&|t, x| unsafe { t.apply(3..n, &x.disjoint()) });
             let bits = |v: &[DVec3]| {
                 v.iter()

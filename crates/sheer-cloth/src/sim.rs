@@ -26,8 +26,10 @@ use crate::wind::{WindField, corner_share_of_triangle_force};
 /// Error building a [`Simulation`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SetupError {
+    /// The cloth model cannot be simulated.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// A parameter is outside its valid range.
     #[error(transparent)]
     Param(#[from] ParamError),
 }
@@ -35,6 +37,7 @@ pub enum SetupError {
 /// What a successful step did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepInfo {
+    /// Sub-steps the step was divided into (the method's `substeps`).
     pub substeps: u32,
     /// Implicit Euler only: the largest CG iteration count over the sub-steps.
     pub cg_iterations: u32,
@@ -48,8 +51,11 @@ pub(crate) type SolverKey = (f64, [(f64, f64, f64); 3], bool);
 /// Summary of spring strains (dimensionless).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StrainStatistics {
+    /// Mean strain over the springs.
     pub mean: f64,
+    /// 99th-percentile strain: the one at index `⌊0.99 n⌋` of the `n` strains sorted ascending.
     pub p99: f64,
+    /// Largest strain.
     pub max: f64,
 }
 
@@ -853,6 +859,7 @@ impl Simulation {
 
     // ---- parameters ------------------------------------------------------------------------------
 
+    /// The parameters in force (those given to [`Simulation::new`] or the latest [`Simulation::set_params`]).
     pub fn params(&self) -> &SimParams {
         &self.params
     }
@@ -973,18 +980,22 @@ impl Simulation {
         self.step_count
     }
 
+    /// Number of particles in the cloth.
     pub fn particle_count(&self) -> usize {
         self.positions.len()
     }
 
+    /// The model's rest positions (where [`reset`](Simulation::reset) puts the particles), m.
     pub fn rest_positions(&self) -> &[DVec3] {
         &self.rest_positions
     }
 
+    /// Lumped particle masses, kg.
     pub fn masses(&self) -> &[f64] {
         &self.masses
     }
 
+    /// The model's triangles, as particle indices (the wind acts on them; renderers draw them).
     pub fn triangles(&self) -> &[[u32; 3]] {
         &self.triangles
     }
@@ -1003,6 +1014,7 @@ impl Simulation {
         }
     }
 
+    /// The grid's shape when the cloth was built by [`ClothModel::grid`](crate::ClothModel::grid).
     pub fn grid(&self) -> Option<GridShape> {
         self.grid
     }

@@ -279,8 +279,9 @@ unsafe fn along_block<
     let split = (index(&tables.split_ends.0), index(&tables.split_ends.1));
     let merge = [index(&tables.merge_ends[0]), index(&tables.merge_ends[1])];
     let particles = 2 * count;
-    // SAFETY (the loads and stores below): by the caller's contract, `particles` particles and `count`
-    // constraints from the block's first are valid.
+    // SAFETY: the loads and stores below touch only the `particles` particles from `at` and the `count`
+    // constraints from `first` (`load` and `store` mask off the rest), which by the caller's contract
+    // are valid in `arrays` and exclusive to this thread.
     unsafe {
         let ends = |p: *const f64| load_ends::<PARTIAL>(p.add(at), particles, split);
         let [ax, bx] = ends(arrays.x[0]);
@@ -355,8 +356,9 @@ unsafe fn solve<
     let inverse_squared_length = _mm512_div_pd(_mm512_set1_pd(1.0), squared_length);
     let length = _mm512_sqrt_pd(squared_length);
     let elastic = _mm512_sub_pd(rest, length);
-    // SAFETY (the multiplier loads and stores): by the caller's contract.
     let elastic = if !PBD && MULTIPLIERS {
+        // SAFETY: with `MULTIPLIERS`, `count` multipliers are readable at `lambda_at` (the caller's
+        // contract), and `load` reads only those.
         let lambda = unsafe { load::<PARTIAL>(lambda_at, count, 0) };
         _mm512_sub_pd(
             elastic,
@@ -389,6 +391,8 @@ unsafe fn solve<
         _mm512_mul_pd(inverse_denominator, inverse_squared_length),
     );
     if MULTIPLIERS {
+        // SAFETY: with `MULTIPLIERS`, `count` multipliers are readable and writable at `lambda_at` (the
+        // caller's contract), and `load` and `store` touch only those.
         unsafe {
             let change = _mm512_maskz_mul_pd(active, coefficient, length);
             let lambda = _mm512_add_pd(load::<PARTIAL>(lambda_at, count, 0), change);
@@ -522,8 +526,9 @@ unsafe fn apart_block<
     count: usize,
     family: FamilyConstants,
 ) {
-    // SAFETY (the loads and stores): by the caller's contract; `load` and `store` touch only the first
-    // `count` of each.
+    // SAFETY: the loads and stores below touch only the `count` particles from `a` and from `b` and the
+    // `count` constraints from `first` (`load` and `store` mask off the rest), which by the caller's
+    // contract are valid in `arrays` and exclusive to this thread.
     unsafe {
         let load_at = |p: *const f64, i: usize| load::<PARTIAL>(p.add(i), count, 0);
         let x = arrays.x.map(|p| p.cast_const());

@@ -16,7 +16,9 @@ macro_rules! by_cpu {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
             fn body $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $(-> $ret)? $body
+            // The one place outside the unsafe modules (see lib.rs) where this crate calls unsafe code.
             #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
             {
                 #[target_feature(enable = "avx512f")]
                 #[allow(clippy::too_many_arguments)]

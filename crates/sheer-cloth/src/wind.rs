@@ -86,6 +86,7 @@ impl WindField {
         })
     }
 
+    /// The wind parameters the field was drawn from.
     pub fn params(&self) -> &Wind {
         &self.params
     }

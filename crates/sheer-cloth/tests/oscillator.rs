@@ -101,7 +101,7 @@ fn symplectic_methods_keep_energy_bounded_over_ten_thousand_periods() {
         |x: f64, v: f64| v * v + OMEGA * OMEGA * x * x - h * OMEGA * OMEGA * x * v;
     let verlet_form = |x: f64, v: f64| v * v + OMEGA * OMEGA * x * x * (1.0 - c);
     type Invariant<'a> = &'a dyn Fn(f64, f64) -> f64;
-    let cases: [(Method, f64, Invariant); 2] = [
+    let cases: [(Method, f64, Invariant<'_>); 2] = [
         (
             Method::SymplecticEuler { substeps: 1 },
             OMEGA * h / (2.0 - OMEGA * h),

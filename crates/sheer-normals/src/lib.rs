@@ -34,6 +34,11 @@
 //! # Ok::<(), sheer_normals::NormalsError>(())
 //! ```
 
+// No unsafe code in this crate: forbidden here, where the workspace only denies it.
+#![forbid(unsafe_code)]
+// Standard output belongs to the program using the library: results and errors are returned.
+#![warn(clippy::print_stdout)]
+
 mod error;
 mod light;
 mod lit_side;

@@ -7,6 +7,11 @@
 //!
 //! See `README.md` for the irradiance-convention finding and the cancellation-free form of eq. (5).
 
+// No unsafe code in this crate: forbidden here, where the workspace only denies it.
+#![forbid(unsafe_code)]
+// Standard output belongs to the program using the library: results and errors are returned.
+#![warn(clippy::print_stdout)]
+
 pub mod all_orders;
 pub mod csv;
 pub mod model;

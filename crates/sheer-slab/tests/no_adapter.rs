@@ -4,6 +4,8 @@
 use sheer_slab::render::{HeadlessRenderer, RenderError};
 
 #[test]
+// `set_var` is unsafe since edition 2024: another thread may read the environment meanwhile.
+#[allow(unsafe_code)]
 fn no_adapter_is_a_clear_error() {
     // Metal is not compiled into this build, so restricting wgpu to it leaves no adapter at all.
     // SAFETY: this test binary has a single test, so no other thread reads the environment meanwhile.

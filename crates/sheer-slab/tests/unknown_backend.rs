@@ -5,6 +5,8 @@
 use sheer_slab::render::{HeadlessRenderer, RenderError};
 
 #[test]
+// `set_var` is unsafe since edition 2024: another thread may read the environment meanwhile.
+#[allow(unsafe_code)]
 fn a_backend_name_wgpu_does_not_know_is_a_clear_error() {
     // SAFETY: this test binary has a single test, so no other thread reads the environment meanwhile.
     unsafe { std::env::set_var("WGPU_BACKEND", "vulkan, vulcan") };

@@ -34,7 +34,9 @@ pub struct AblationRow {
     pub part: String,
     /// What it is changed to.
     pub setting: String,
+    /// The integrator the variant was run with.
     pub method: Method,
+    /// The variant's grid, (columns, rows) particles.
     pub grid: (usize, usize),
     /// Simulated time, s.
     pub time: f64,
@@ -55,6 +57,7 @@ pub struct AblationRow {
     pub coverage_vs_full: Option<f64>,
     /// Time-averaged coverage difference from the full model's reference.
     pub coverage_vs_reference: Option<f64>,
+    /// Whether the variant's run diverged before `time` (its error columns are then `None`).
     pub diverged: bool,
 }
 
@@ -95,7 +98,9 @@ pub(crate) fn resample(positions: &[DVec3], from: &GridSpec, to: &GridSpec) -> V
 /// or coverage.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostTiming {
+    /// Rounds of timed runs per variant (each a ratio; the median is reported).
     pub rounds: usize,
+    /// Simulated time each timed run covers, s.
     pub window: f64,
 }
 
@@ -103,8 +108,11 @@ pub struct CostTiming {
 /// and greatest of them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostRatio {
+    /// The median of the rounds' ratios.
     pub median: f64,
+    /// The least of them.
     pub low: f64,
+    /// The greatest of them.
     pub high: f64,
 }
 

@@ -17,10 +17,18 @@ pub const DEFAULT_COVERAGE_BUDGET: f64 = 0.04;
 pub enum Budget {
     /// RMS position error at most `max_error` (m) at simulated time `time` (s). Meaningful for the
     /// flag only inside its predictability horizon (≈ 0.25 s): later it measures decorrelation.
-    RmsPosition { time: f64, max_error: f64 },
+    RmsPosition {
+        /// Simulated time of the comparison, s.
+        time: f64,
+        /// The largest RMS position error allowed, m.
+        max_error: f64,
+    },
     /// Time-averaged coverage difference ([`crate::coverage`]) at most `max_difference`
     /// (dimensionless), over the scene's coverage window. Insensitive to the flutter's phase.
-    Coverage { max_difference: f64 },
+    Coverage {
+        /// The largest time-averaged coverage difference allowed (dimensionless, in [0, 1]).
+        max_difference: f64,
+    },
 }
 
 impl Default for Budget {
@@ -77,8 +85,11 @@ impl Budget {
 /// The chosen setting with its measured error and cost.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Choice {
+    /// Name of the scene the choice was made for.
     pub scene: String,
+    /// The cheapest measured method (with its sub-steps and iterations) that meets the budget.
     pub method: Method,
+    /// The budget it meets.
     pub budget: Budget,
     /// The measured error the budget constrains ([`Budget::error_of`]).
     pub error: f64,
@@ -126,8 +137,11 @@ pub const REAL_TIME_CPU_MS_PER_SIMULATED_SECOND: f64 = 500.0;
 pub struct ChoiceFile {
     /// Written by a `--quick` run (small grids, short window): a smoke test, not a choice for the app.
     pub quick: bool,
+    /// The chosen method and what it measured.
     pub choice: ChoiceRecord,
+    /// The budget it was chosen against.
     pub budget: BudgetRecord,
+    /// The converged reference and the yardsticks the budget is sized by.
     pub reference: ReferenceRecord,
     /// The flag the choice was measured on (the app's default, method included).
     pub scene: SceneRecord,
@@ -139,6 +153,7 @@ pub struct ChoiceFile {
 pub struct ChoiceRecord {
     /// [`Method::name`].
     pub method: String,
+    /// [`Method::substeps`]: sub-steps per 1/60 s frame.
     pub substeps: u32,
     /// [`Method::iterations`] (1 for single-iteration methods; the CG cap for implicit Euler).
     pub iterations: u32,
@@ -149,6 +164,7 @@ pub struct ChoiceRecord {
     pub coverage_difference: Option<f64>,
     /// RMS position error against the reference, m, as `[time_s, error_m]` pairs.
     pub rms_position_error_m: Vec<[f64; 2]>,
+    /// CPU milliseconds per simulated second (one thread).
     pub cpu_ms_per_simulated_second: f64,
     /// Whether the cost is within [`REAL_TIME_CPU_MS_PER_SIMULATED_SECOND`].
     pub real_time: bool,
@@ -176,7 +192,9 @@ pub struct BudgetRecord {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceRecord {
+    /// [`Method::name`] of the converged reference run.
     pub method: String,
+    /// Its sub-steps per 1/60 s frame.
     pub substeps: u32,
     /// Coverage difference between the reference and the same at twice its step.
     #[serde(skip_serializing_if = "Option::is_none", default)]
@@ -195,7 +213,9 @@ pub struct ReferenceRecord {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneRecord {
+    /// The particle grid: counts, size (m), areal density (kg/m²) and placement.
     pub flag: GridSpec,
+    /// The simulation parameters, the chosen method included.
     pub simulation: SimParams,
 }
 

@@ -27,6 +27,7 @@ use crate::{Monitor, Scene, StudyError};
 /// `sheer study …`
 #[derive(Args, Clone, Debug)]
 pub struct StudyArgs {
+    /// Which study to run.
     #[command(subcommand)]
     pub command: StudyCommand,
 }
@@ -87,6 +88,7 @@ const DEFAULT_BUDGET_TIME: f64 = 0.25;
 /// Options of `seeds`.
 #[derive(Args, Clone, Debug)]
 pub struct SeedArgs {
+    /// Where and how much to run.
     #[command(flatten)]
     pub output: OutputArgs,
     /// How many seeds of the wind's gusts (1, 2, … n), each a flutter of its own with its own reference
@@ -98,12 +100,15 @@ pub struct SeedArgs {
 /// Output plus budget options.
 #[derive(Args, Clone, Debug)]
 pub struct ChoiceArgs {
+    /// Where and how much to run.
     #[command(flatten)]
     pub output: OutputArgs,
+    /// The error budget the choice must meet.
     #[command(flatten)]
     pub budget: BudgetArgs,
 }
 
+/// The study commands, one per figure or table of `docs/` (and `all` of them).
 #[derive(Subcommand, Clone, Debug)]
 pub enum StudyCommand {
     /// Work–precision sweep of every method on the flag, the hanging sheet and the stiff sheet.
@@ -506,11 +511,14 @@ pub fn write_work_precision(
 pub struct ChoiceMeasurement {
     /// The default flag at the choice grid, with the config's coverage window.
     pub scene: Scene,
+    /// The converged reference run of that scene.
     pub reference: Reference,
     /// Coverage difference of the converged coarser flag (`StudyConfig::choice_coarse_grid`) from
     /// the reference.
     pub resolution_coverage_difference: Option<f64>,
+    /// Every measured setting at every sample time (the choice's candidates).
     pub rows: Vec<Row>,
+    /// The cheapest setting within the budget; `None` when none meets it.
     pub choice: Option<Choice>,
 }
 

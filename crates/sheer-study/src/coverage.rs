@@ -27,6 +27,7 @@ pub struct CoverageWindow {
     pub start: f64,
     /// Last sampled simulated time, s (inclusive).
     pub end: f64,
+    /// The window of the x–y plane the coverage is rasterised in.
     pub viewport: Viewport,
 }
 
@@ -51,6 +52,7 @@ impl CoverageWindow {
 /// Per-pixel fraction of the sampled frames in which the cloth covered the pixel's centre, row-major.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeanCoverage {
+    /// The window it was rasterised in (`fractions` has its `resolution²` pixels).
     pub viewport: Viewport,
     /// `resolution²` fractions in [0, 1].
     pub fractions: Vec<f64>,

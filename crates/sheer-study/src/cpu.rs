@@ -5,6 +5,7 @@
 //! costs it reports (caches and memory bandwidth are still shared: the docs say what else was running).
 
 /// CPU seconds consumed by the calling thread so far.
+#[allow(unsafe_code)] // the FFI call below: std has no per-thread CPU clock.
 pub fn thread_cpu_seconds() -> f64 {
     let mut now = libc::timespec {
         tv_sec: 0,

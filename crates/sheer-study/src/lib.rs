@@ -21,6 +21,9 @@
 //! # Ok::<(), sheer_study::StudyError>(())
 //! ```
 
+// Standard output belongs to the program using the library: results and errors are returned.
+#![warn(clippy::print_stdout)]
+
 pub mod ablation;
 pub mod chart;
 pub mod choose;

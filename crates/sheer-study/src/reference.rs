@@ -25,6 +25,7 @@ pub const REFERENCE_SAFETY: f64 = 0.25;
 /// The difference between the reference at step `h` and at `h/2`, at one time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HalvingCheck {
+    /// Simulated time of the comparison, s.
     pub time: f64,
     /// RMS position difference, m.
     pub rms_difference: f64,
@@ -35,12 +36,15 @@ pub struct HalvingCheck {
 /// A converged solution of a scene: the finer of the two halving runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reference {
+    /// Name of the scene it solves.
     pub scene: String,
     /// The method and sub-step count of the finer run.
     pub method: Method,
     /// Sub-step length of the finer run, s.
     pub substep: f64,
+    /// The finer run's samples.
     pub trajectory: Trajectory,
+    /// Its difference from the coarser run at each sample time: how converged it is.
     pub halving: Vec<HalvingCheck>,
     /// Coverage difference (dimensionless) of the coarser run against the finer one, when the scene
     /// measures coverage: errors in coverage below it are not resolved.

@@ -24,6 +24,7 @@ pub struct Snapshot {
 /// A finished (or diverged) run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Trajectory {
+    /// The integrator the run used.
     pub method: Method,
     /// Length of each `step` call, s.
     pub step: f64,

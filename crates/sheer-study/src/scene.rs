@@ -34,7 +34,9 @@ pub enum Pinning {
 pub struct Scene {
     /// Short snake_case name (CSV column `scene`).
     pub name: String,
+    /// The particle grid: counts, size (m), areal density (kg/m²) and placement.
     pub grid: GridSpec,
+    /// Which particles are pinned.
     pub pinning: Pinning,
     /// Parameters of the model; `method` is replaced by each run's method.
     pub params: SimParams,

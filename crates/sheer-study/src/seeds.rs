@@ -32,6 +32,7 @@ pub struct SeedRow {
     pub seed: u64,
     /// What differs from the full model (`full model` for the full model itself).
     pub setting: String,
+    /// The integrator the setting was run with.
     pub method: Method,
     /// Time-averaged coverage difference from this seed's reference (`None` if the run diverged).
     pub coverage_vs_reference: Option<f64>,
@@ -44,19 +45,23 @@ pub struct SeedRow {
 /// One setting over every seed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SeedSummary {
+    /// What differs from the full model (`full model` for the full model itself).
     pub setting: String,
+    /// The integrator the setting was run with.
     pub method: Method,
     /// Seeds on which the run finished (did not diverge).
     pub seeds: usize,
-    /// Mean and sample standard deviation of the coverage difference from the reference.
+    /// Mean over the seeds of the coverage difference from the reference.
     pub mean_vs_reference: f64,
+    /// Sample standard deviation over the seeds of the coverage difference from the reference.
     pub spread_vs_reference: f64,
-    /// Least and greatest coverage difference from the reference.
+    /// Least coverage difference from the reference over the seeds.
     pub least_vs_reference: f64,
+    /// Greatest coverage difference from the reference over the seeds.
     pub greatest_vs_reference: f64,
-    /// Mean of `D(setting, reference) − D(full model, reference)`, seed by seed, and its standard error
-    /// (`s/√n`; 0 with one seed).
+    /// Mean of `D(setting, reference) − D(full model, reference)`, seed by seed.
     pub mean_change: f64,
+    /// Standard error of `mean_change` (`s/√n`; 0 with one seed).
     pub change_standard_error: f64,
 }
 

@@ -16,10 +16,13 @@ pub const MAX_RESOLUTION: usize = 16_384;
 /// A square window of the x–y plane, m, rasterised at `resolution × resolution` pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Viewport {
+    /// Left edge of the window, m.
     pub min_x: f64,
+    /// Bottom edge of the window, m.
     pub min_y: f64,
     /// Side of the square window, m.
     pub size: f64,
+    /// Pixels along each side (at most [`MAX_RESOLUTION`]).
     pub resolution: usize,
 }
 

@@ -180,6 +180,7 @@ pub enum StabilityClass {
 }
 
 impl StabilityClass {
+    /// Short lowercase name, as written in the stability CSV.
     pub fn name(&self) -> &'static str {
         match self {
             StabilityClass::Stable => "stable",
@@ -192,11 +193,13 @@ impl StabilityClass {
 /// One cell of the stability map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StabilityCell {
+    /// The integrator run in this cell.
     pub method: Method,
     /// Stretch stiffness, N/m (XPBD compliance is its inverse; PBD ignores it).
     pub stiffness: f64,
     /// Time step of each `step` call (one sub-step), s.
     pub dt: f64,
+    /// Whether the run stayed stable and accurate, stable but inaccurate, or diverged.
     pub class: StabilityClass,
     /// RMS position error against the reference at the end, m (`None` if diverged).
     pub rms_position_error: Option<f64>,
@@ -205,6 +208,7 @@ pub struct StabilityCell {
 /// Linear-analysis prediction for one stiffness.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StabilityPrediction {
+    /// Stretch stiffness, N/m.
     pub stiffness: f64,
     /// `2/ω_max` with `ω_max` by power iteration, s.
     pub dt_power_iteration: f64,
@@ -215,6 +219,7 @@ pub struct StabilityPrediction {
 /// What [`stability_map`] measures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilitySetup {
+    /// The undamped sheet's grid, (columns, rows) particles.
     pub grid: (usize, usize),
     /// Stretch stiffnesses, N/m.
     pub stiffnesses: Vec<f64>,
@@ -224,6 +229,7 @@ pub struct StabilitySetup {
     pub duration: f64,
     /// RMS position error above which a run counts as inaccurate, m.
     pub error_bound: f64,
+    /// The integrators to map, each with its own sub-step and iteration counts.
     pub methods: Vec<Method>,
 }
 
@@ -280,8 +286,11 @@ impl StabilitySetup {
 /// The map and the predictions.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilityMap {
+    /// What was measured.
     pub setup: StabilitySetup,
+    /// One cell per method, stiffness and step.
     pub cells: Vec<StabilityCell>,
+    /// The linear analysis' step limit, one per stiffness.
     pub predictions: Vec<StabilityPrediction>,
 }
 

@@ -14,17 +14,22 @@ use crate::{Monitor, Scene, StudyError};
 /// The knob settings of every method to run, each called with `step(scene.frame)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sweep {
+    /// The methods, each with its own sub-step and iteration counts.
     pub methods: Vec<Method>,
 }
 
 /// One run at one sample time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Row {
+    /// Name of the scene run.
     pub scene: String,
+    /// Particles in the scene's cloth.
     pub particles: usize,
+    /// The integrator run, with its sub-step and iteration counts.
     pub method: Method,
     /// Sub-step length, s.
     pub substep: f64,
+    /// The run's errors against the reference at this sample time.
     pub metrics: ErrorMetrics,
     /// CPU milliseconds per simulated second (single thread), measured over the whole run.
     pub cpu_ms_per_simulated_second: f64,
@@ -49,6 +54,7 @@ impl Row {
 /// [`StudyConfig::quick`] for tests and smoke runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StudyConfig {
+    /// Whether this is the quick smoke-test configuration (small grids, short windows).
     pub quick: bool,
     /// Flag and sheet grid of the work–precision sweeps.
     pub sweep_grid: (usize, usize),
@@ -71,8 +77,11 @@ pub struct StudyConfig {
     pub ablation_timing: CostTiming,
     /// Grid of the stability map.
     pub stability_grid: (usize, usize),
+    /// Stretch stiffnesses of the stability map, N/m.
     pub stability_stiffnesses: Vec<f64>,
+    /// Time steps of the stability map, s.
     pub stability_steps: Vec<f64>,
+    /// Simulated time of each stability-map run, s.
     pub stability_duration: f64,
 }
 

@@ -22,6 +22,11 @@
 //! unit irradiance (W m⁻²) measured on a plane normal to the incident beam (so the flux crossing the lit
 //! surface is `μ0` per unit area), which is eqs. (4)–(5) with `E(0) = 1` and `μ0` counted once.
 
+// No unsafe code in this crate: forbidden here, where the workspace only denies it.
+#![forbid(unsafe_code)]
+// Standard output belongs to the program using the library: results and errors are returned.
+#![warn(clippy::print_stdout)]
+
 pub mod diffuse;
 pub mod expint;
 pub mod hfunction;
