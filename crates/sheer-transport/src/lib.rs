@@ -10,7 +10,8 @@
 //!   function along optical depth, solved by Nyström product integration (see the crate README for the
 //!   choice of method and its convergence);
 //! * [`hfunction`]: Chandrasekhar's H-function for isotropic scattering (the semi-infinite limit);
-//! * [`monte_carlo`]: an analog photon-transport simulation of the same slab, used to check the solver;
+//! * [`monte_carlo`]: an analog photon-transport simulation of the same slab, used to check the solver,
+//!   and of two parallel slabs (translucent shadows);
 //! * [`table`]: a precomputed table of the multiply-scattered radiance over (τ1, μ0, μ, Λ) with its
 //!   quadrilinear sampler, for real-time use;
 //! * [`diffuse`]: the all-orders response `R_d(μ)`, `T_d(μ)` to uniform radiance over a whole face's
@@ -41,7 +42,10 @@ mod validate;
 
 pub use diffuse::{DiffuseResponse, DiffuseTable};
 pub use hfunction::HFunction;
-pub use monte_carlo::{Incidence, MonteCarloTally, simulate_photons, simulate_photons_diffuse};
+pub use monte_carlo::{
+    FaceTally, Incidence, MonteCarloTally, SlabLayer, TwoSlabTally, simulate_photons,
+    simulate_photons_diffuse, simulate_two_slabs,
+};
 pub use single::{
     henyey_greenstein_phase, single_scattered_reflected_radiance,
     single_scattered_reflected_radiance_hg, single_scattered_transmitted_radiance,

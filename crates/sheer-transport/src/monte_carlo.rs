@@ -17,6 +17,26 @@
 //!
 //! Counts are binomial, so a bin's standard error is `F_in √(p(1−p)/N)` with `p` the fraction counted.
 //!
+//! Two slabs ([`simulate_two_slabs`]): a beam at μ0 of unit normal irradiance enters the front slab,
+//! and photons move between it and a parallel back slab behind it. The slabs are infinitely wide, so the
+//! gap between them does not matter: a photon leaving the front slab's far face enters the back slab's
+//! near face in the same direction, one leaving the back slab's near face re-enters the front slab's
+//! far face, and photons leaving the front slab towards the light or the back slab's far face escape.
+//! Each photon again stands for `μ0 / N`, and the tallies estimate the back slab's own scattered
+//! radiance, the light whose last interaction was in the back slab, leaving through
+//!
+//! * its far face ([`TwoSlabTally::far`]): band flux `2π ∫ L_far(μ) μ dμ`;
+//! * its near face, counted as it leaves the back slab, before it re-enters the front one
+//!   ([`TwoSlabTally::lit`]): band flux `2π ∫ L_lit(μ) μ dμ`.
+//!
+//! Light the front slab scatters and that then crosses the back slab without interacting is not the back
+//! slab's radiance and is not counted. A photon can leave the back slab's near face more than once (it is
+//! scattered back by the front slab and scattered again by the back one), so those counts are not
+//! binomial: [`FaceTally`] keeps each photon's squared counts for the standard error. The subsets
+//! [`TwoSlabTally::far_direct`] and [`TwoSlabTally::lit_direct`] count the crossings of photons that
+//! have not interacted in the front slab: they reached the back slab in the unscattered beam, and
+//! estimate exactly `t1 × ` the back slab's own response to that beam, `t1 = e^{−τ1_front/μ0}`.
+//!
 //! Randomness: xoshiro256++ (Blackman & Vigna 2018) seeded per batch of photons through splitmix64, so
 //! results depend only on the seed and photon count, not on the number of rayon threads.
 
@@ -234,22 +254,35 @@ fn simulate(
     if !(1..=MAX_BINS).contains(&bins) {
         return Err(TransportError::Bins(bins));
     }
-    let batches = photons.div_ceil(BATCH);
-    // Summed as they finish, so that at most a few tallies are alive at once (collecting one per batch
-    // held `batches` of them). Integer counts: the same totals in any order, on any thread count.
-    let total = (0..batches)
+    Ok(run_batches(
+        photons,
+        seed,
+        |count, rng| simulate_batch(tau1, albedo, incidence, count, bins, rng),
+        || MonteCarloTally::empty(incidence, bins),
+        MonteCarloTally::merged,
+    ))
+}
+
+/// Runs `photons` photons in batches of [`BATCH`], batch `b` on its own generator seeded from `seed`
+/// and `b`, on rayon, and merges the batches' tallies. Tallies are summed as they finish, so that at
+/// most a few are alive at once (collecting one per batch held all of them); they hold integer counts,
+/// so the totals are the same in any order, on any thread count.
+fn run_batches<T: Send>(
+    photons: u64,
+    seed: u64,
+    batch: impl Fn(u64, &mut Xoshiro256PlusPlus) -> T + Sync + Send,
+    empty: impl Fn() -> T + Sync + Send,
+    merge: impl Fn(T, T) -> T + Sync + Send,
+) -> T {
+    (0..photons.div_ceil(BATCH))
         .into_par_iter()
-        .map(|batch| {
-            let count = BATCH.min(photons - batch * BATCH);
-            let mut seed_state = seed ^ batch.wrapping_mul(0xd1b5_4a32_d192_ed03);
+        .map(|index| {
+            let count = BATCH.min(photons - index * BATCH);
+            let mut seed_state = seed ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03);
             let mut rng = Xoshiro256PlusPlus::seeded(splitmix64(&mut seed_state));
-            simulate_batch(tau1, albedo, incidence, count, bins, &mut rng)
+            batch(count, &mut rng)
         })
-        .reduce(
-            || MonteCarloTally::empty(incidence, bins),
-            MonteCarloTally::merged,
-        );
-    Ok(total)
+        .reduce(empty, merge)
 }
 
 fn simulate_batch(
@@ -295,6 +328,234 @@ fn simulate_batch(
             scattered = true;
             inward_cosine = 2.0 * rng.uniform() - 1.0;
         }
+    }
+    tally
+}
+
+/// One slab of a two-slab stack: optical thickness `tau1` > 0 and single-scattering albedo Λ ∈ [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlabLayer {
+    /// Optical thickness τ1.
+    pub tau1: f64,
+    /// Single-scattering albedo Λ.
+    pub albedo: f64,
+}
+
+/// Crossings of one face of the back slab of a two-slab run, per uniform μ bin, with the second moments
+/// that their standard errors need (module docs: a photon may cross a face more than once).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceTally {
+    /// Photons launched.
+    pub photons: u64,
+    /// Flux each photon stands for, times the photons: the incident cosine μ0 of the unit beam.
+    pub incident_flux: f64,
+    /// Crossings per bin.
+    pub counts: Vec<u64>,
+    /// Per bin, the sum over photons of the square of that photon's crossings in the bin.
+    pub squares: Vec<u64>,
+    /// The sum over photons of the square of that photon's crossings of the whole face.
+    pub total_squares: u64,
+}
+
+impl FaceTally {
+    fn empty(incident_flux: f64, bins: usize) -> Self {
+        FaceTally {
+            photons: 0,
+            incident_flux,
+            counts: vec![0; bins],
+            squares: vec![0; bins],
+            total_squares: 0,
+        }
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.photons += other.photons;
+        for (sum, add) in self.counts.iter_mut().zip(&other.counts) {
+            *sum += add;
+        }
+        for (sum, add) in self.squares.iter_mut().zip(&other.squares) {
+            *sum += add;
+        }
+        self.total_squares += other.total_squares;
+    }
+
+    /// Number of μ bins.
+    pub fn bins(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// The cosine band `[μa, μb]` of bin `index`.
+    pub fn bin_band(&self, index: usize) -> (f64, f64) {
+        let n = self.bins() as f64;
+        (index as f64 / n, (index + 1) as f64 / n)
+    }
+
+    /// Estimated flux `2π ∫ L μ dμ` over bin `bin`'s band, per unit normal irradiance of the beam, and
+    /// its standard error; `None` for a bin beyond the last.
+    pub fn band_flux(&self, bin: usize) -> Option<(f64, f64)> {
+        Some(self.estimate(*self.counts.get(bin)?, *self.squares.get(bin)?))
+    }
+
+    /// Estimated flux `2π ∫_0^1 L μ dμ` through the whole face, and its standard error.
+    pub fn total_flux(&self) -> (f64, f64) {
+        self.estimate(self.counts.iter().sum(), self.total_squares)
+    }
+
+    /// Mean and standard error of the mean of per-photon counts `n` with `Σn = sum` and
+    /// `Σn² = squares`, times the incident flux (for 0/1 counts the binomial `√(p(1−p)/N)`).
+    fn estimate(&self, sum: u64, squares: u64) -> (f64, f64) {
+        let n = self.photons.max(1) as f64;
+        let mean = sum as f64 / n;
+        let variance = (squares as f64 / n - mean * mean).max(0.0);
+        (
+            self.incident_flux * mean,
+            self.incident_flux * (variance / n).sqrt(),
+        )
+    }
+}
+
+/// Tallies of a two-slab run (module docs, "Two slabs"): the back slab's scattered light by face.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TwoSlabTally {
+    /// Leaving the back slab's far face, last interaction in the back slab: `L_far`.
+    pub far: FaceTally,
+    /// Leaving the back slab's near face towards the front slab, last interaction in the back slab:
+    /// `L_lit`.
+    pub lit: FaceTally,
+    /// The part of `far` from photons with no interaction in the front slab: `t1 T_back(μ0, μ)`.
+    pub far_direct: FaceTally,
+    /// The part of `lit` from photons with no interaction in the front slab: `t1 R_back(μ0, μ)`.
+    pub lit_direct: FaceTally,
+}
+
+impl TwoSlabTally {
+    fn empty(mu0: f64, bins: usize) -> Self {
+        let face = FaceTally::empty(mu0, bins);
+        TwoSlabTally {
+            far: face.clone(),
+            lit: face.clone(),
+            far_direct: face.clone(),
+            lit_direct: face,
+        }
+    }
+
+    fn faces_mut(&mut self) -> [&mut FaceTally; 4] {
+        [
+            &mut self.far,
+            &mut self.lit,
+            &mut self.far_direct,
+            &mut self.lit_direct,
+        ]
+    }
+
+    fn merged(mut self, mut other: Self) -> Self {
+        for (sum, add) in self.faces_mut().into_iter().zip(other.faces_mut()) {
+            sum.merge(add);
+        }
+        self
+    }
+}
+
+/// Launches `photons` photons of a beam at `mu0` ∈ (0, 1] into the `front` slab of a pair of parallel
+/// slabs, the `back` one behind it, and tallies the back slab's scattered light into `bins` uniform μ
+/// bins per face (module docs, "Two slabs"). Deterministic in `seed`, whatever the thread count.
+pub fn simulate_two_slabs(
+    front: SlabLayer,
+    back: SlabLayer,
+    mu0: f64,
+    photons: u64,
+    bins: usize,
+    seed: u64,
+) -> Result<TwoSlabTally> {
+    for layer in [front, back] {
+        validate::optical_thickness(layer.tau1)?;
+        validate::albedo(layer.albedo)?;
+    }
+    validate::incident_cosine(mu0)?;
+    if photons == 0 {
+        return Err(TransportError::PhotonCount);
+    }
+    if !(1..=MAX_BINS).contains(&bins) {
+        return Err(TransportError::Bins(bins));
+    }
+    Ok(run_batches(
+        photons,
+        seed,
+        |count, rng| simulate_two_slab_batch([front, back], mu0, count, bins, rng),
+        || TwoSlabTally::empty(mu0, bins),
+        TwoSlabTally::merged,
+    ))
+}
+
+/// Indices into [`TwoSlabTally::faces_mut`].
+const FAR: usize = 0;
+const LIT: usize = 1;
+/// Added to `FAR` or `LIT` for the subset without front-slab interactions.
+const DIRECT: usize = 2;
+
+fn simulate_two_slab_batch(
+    layers: [SlabLayer; 2],
+    mu0: f64,
+    photons: u64,
+    bins: usize,
+    rng: &mut Xoshiro256PlusPlus,
+) -> TwoSlabTally {
+    let mut tally = TwoSlabTally::empty(mu0, bins);
+    for face in tally.faces_mut() {
+        face.photons = photons;
+    }
+    let bin_of = |mu: f64| ((mu * bins as f64) as usize).min(bins - 1);
+    // This photon's crossings, (face, bin), squared and summed when it is done.
+    let mut crossings: Vec<(usize, usize)> = Vec::new();
+    for _ in 0..photons {
+        // The slab it is in (0 front, 1 back), the depth below that slab's near face, and the cosine of
+        // its direction with the normal pointing away from the light.
+        let mut slab = 0;
+        let mut depth = 0.0;
+        let mut cosine = mu0;
+        let mut last_in_back = false;
+        let mut front_interacted = false;
+        loop {
+            // 1 − U lies in (0, 1], so the logarithm is finite. A path cut short at a face is drawn
+            // afresh in the next slab: free paths have no memory.
+            let next = depth - cosine * (1.0 - rng.uniform()).ln();
+            if (0.0..=layers[slab].tau1).contains(&next) {
+                depth = next;
+                if rng.uniform() >= layers[slab].albedo {
+                    break;
+                }
+                last_in_back = slab == 1;
+                front_interacted |= slab == 0;
+                cosine = 2.0 * rng.uniform() - 1.0;
+                continue;
+            }
+            let towards_light = next < 0.0;
+            if slab == 1 && last_in_back {
+                let face = if towards_light { LIT } else { FAR };
+                crossings.push((face, bin_of(cosine.abs())));
+                if !front_interacted {
+                    crossings.push((face + DIRECT, bin_of(cosine.abs())));
+                }
+            }
+            match (slab, towards_light) {
+                // Out of the stack: towards the light, or beyond the back slab.
+                (0, true) | (1, false) => break,
+                (0, false) => (slab, depth) = (1, 0.0),
+                _ => (slab, depth) = (0, layers[0].tau1),
+            }
+        }
+        let faces = tally.faces_mut();
+        crossings.sort_unstable();
+        for run in crossings.chunk_by(|a, b| a == b) {
+            let (face, bin) = run[0];
+            let n = run.len() as u64;
+            faces[face].counts[bin] += n;
+            faces[face].squares[bin] += n * n;
+        }
+        for run in crossings.chunk_by(|a, b| a.0 == b.0) {
+            faces[run[0].0].total_squares += (run.len() * run.len()) as u64;
+        }
+        crossings.clear();
     }
     tally
 }

@@ -1,10 +1,13 @@
 //! Monte Carlo photon transport against the deterministic all-orders solver: binned emergent fluxes
 //! must agree within 4 standard errors, and the simulation must not depend on the rayon thread count.
+//! The two-slab simulation: limits it must reproduce exactly or statistically, its error estimates,
+//! determinism and typed errors (its comparison with the renderer's approximation is in
+//! `tests/two_slabs.rs`).
 
 use sheer_transport::quadrature::gauss_legendre;
 use sheer_transport::{
-    SlabSolver, TransportError, simulate_photons, single_scattered_reflected_radiance,
-    single_scattered_transmitted_radiance,
+    SlabLayer, SlabSolver, TransportError, simulate_photons, simulate_two_slabs,
+    single_scattered_reflected_radiance, single_scattered_transmitted_radiance,
 };
 
 /// Single-scattering-only flux `2π ∫ L₁ μ dμ` over a band (eqs. (4)–(5)), by 32-point Gauss.
@@ -111,4 +114,146 @@ fn monte_carlo_rejects_bad_input() {
         })
     ));
     assert!(tally.flux_with_error(10).is_ok());
+}
+
+const FRONT: SlabLayer = SlabLayer {
+    tau1: 1.0,
+    albedo: 0.9,
+};
+const BACK: SlabLayer = SlabLayer {
+    tau1: 2.0,
+    albedo: 0.99,
+};
+
+#[test]
+fn two_slabs_black_back_slab_scatters_nothing() {
+    let black = SlabLayer {
+        albedo: 0.0,
+        ..BACK
+    };
+    let tally = simulate_two_slabs(FRONT, black, 0.7, 200_000, 8, 3).unwrap();
+    for face in [&tally.lit, &tally.far, &tally.lit_direct, &tally.far_direct] {
+        assert!(face.counts.iter().all(|&c| c == 0), "{face:?}");
+        assert_eq!(face.total_flux(), (0.0, 0.0));
+    }
+}
+
+#[test]
+fn two_slabs_black_front_slab_passes_only_the_direct_beam() {
+    // Whatever interacts in a front slab of Λ = 0 is absorbed: every photon the back slab scatters
+    // came in the unscattered beam, so the tallies equal their direct parts count for count, and no
+    // photon leaves the back slab's near face twice.
+    let black = SlabLayer {
+        albedo: 0.0,
+        ..FRONT
+    };
+    let tally = simulate_two_slabs(black, BACK, 0.7, 200_000, 8, 3).unwrap();
+    assert_eq!(tally.far, tally.far_direct);
+    assert_eq!(tally.lit, tally.lit_direct);
+    assert_eq!(tally.lit.counts, tally.lit.squares);
+    assert!(tally.lit.counts.iter().sum::<u64>() > 1000);
+}
+
+#[test]
+fn two_slabs_with_a_vanishing_front_slab_is_the_back_slab_alone() {
+    // τ1 = 1e-6 in front: about 1e-6 of the photons interact there, far below the statistics, so the back
+    // slab's tallies are those of the back slab alone (simulate_photons) within 4 standard errors of
+    // the difference of two independent runs, in every bin of both faces (2 × 10 comparisons: an
+    // unbiased run fails with probability ≈ 20 × 6.3e-5 ≈ 0.1 %; fixed seeds).
+    let thin = SlabLayer {
+        tau1: 1e-6,
+        albedo: 0.9,
+    };
+    let (mu0, photons, bins) = (0.6, 1_000_000, 10);
+    let pair = simulate_two_slabs(thin, BACK, mu0, photons, bins, 11).unwrap();
+    let alone = simulate_photons(BACK.tau1, BACK.albedo, mu0, photons, bins, 12).unwrap();
+    for bin in 0..bins {
+        for (face, two, count) in [
+            ("lit", &pair.lit, alone.reflected[bin]),
+            ("far", &pair.far, alone.transmitted[bin]),
+        ] {
+            let (a, sa) = two.band_flux(bin).unwrap();
+            let (b, sb) = alone.flux_with_error(count).unwrap();
+            assert!(
+                (a - b).abs() < 4.0 * sa.hypot(sb),
+                "{face} bin {bin}: two slabs {a} ± {sa}, one slab {b} ± {sb}"
+            );
+        }
+    }
+}
+
+#[test]
+fn two_slab_errors_follow_the_counts() {
+    // A photon leaves the far face at most once: its counts are binomial, and the standard error is
+    // √(p(1−p)/N) μ0. Between two bright slabs some photons leave the back slab's near face twice or
+    // more (squares exceed counts), and the error accounts for it.
+    let (mu0, photons) = (0.5, 300_000);
+    let tally = simulate_two_slabs(FRONT, BACK, mu0, photons, 6, 5).unwrap();
+    assert_eq!(tally.far.counts, tally.far.squares);
+    for bin in 0..6 {
+        let p = tally.far.counts[bin] as f64 / photons as f64;
+        let (flux, error) = tally.far.band_flux(bin).unwrap();
+        assert!((flux - mu0 * p).abs() < 1e-15);
+        assert!((error - mu0 * (p * (1.0 - p) / photons as f64).sqrt()).abs() < 1e-15);
+    }
+    assert!(tally.far.band_flux(6).is_none());
+    let lit = &tally.lit;
+    assert!(lit.squares.iter().zip(&lit.counts).any(|(s, c)| s > c));
+    assert!(lit.total_squares > lit.counts.iter().sum::<u64>());
+    let (flux, error) = lit.total_flux();
+    let n = photons as f64;
+    let mean = lit.counts.iter().sum::<u64>() as f64 / n;
+    let binomial = mu0 * (mean * (1.0 - mean) / n).sqrt();
+    assert!((flux - mu0 * mean).abs() < 1e-15 && error > binomial);
+}
+
+#[test]
+fn two_slabs_are_independent_of_thread_count() {
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| simulate_two_slabs(FRONT, BACK, 0.5, 300_000, 8, 7).unwrap())
+    };
+    assert_eq!(run(1), run(3));
+}
+
+#[test]
+fn two_slabs_reject_bad_input() {
+    let bad_tau = [0.0, -1.0, f64::NAN, f64::INFINITY];
+    for tau1 in bad_tau {
+        let layer = SlabLayer { tau1, ..FRONT };
+        for (front, back) in [(layer, BACK), (FRONT, layer)] {
+            assert!(matches!(
+                simulate_two_slabs(front, back, 0.5, 10, 4, 1),
+                Err(TransportError::OpticalThickness(_))
+            ));
+        }
+    }
+    for albedo in [-0.1, 1.5, f64::NAN] {
+        let layer = SlabLayer { albedo, ..FRONT };
+        for (front, back) in [(layer, BACK), (FRONT, layer)] {
+            assert!(matches!(
+                simulate_two_slabs(front, back, 0.5, 10, 4, 1),
+                Err(TransportError::Albedo(_))
+            ));
+        }
+    }
+    for mu0 in [0.0, -0.5, 1.5, f64::NAN] {
+        assert!(matches!(
+            simulate_two_slabs(FRONT, BACK, mu0, 10, 4, 1),
+            Err(TransportError::Cosine { name: "mu0", .. })
+        ));
+    }
+    assert!(matches!(
+        simulate_two_slabs(FRONT, BACK, 0.5, 0, 4, 1),
+        Err(TransportError::PhotonCount)
+    ));
+    for bins in [0, sheer_transport::monte_carlo::MAX_BINS + 1] {
+        assert!(matches!(
+            simulate_two_slabs(FRONT, BACK, 0.5, 10, bins, 1),
+            Err(TransportError::Bins(b)) if b == bins
+        ));
+    }
 }
