@@ -1261,7 +1261,7 @@ mod key_tests {
         ("shading.baseline_alpha", "0.5"),
         ("shading.exposure", "1.5"),
         ("shading.shadows", "false"),
-        ("shading.shadow_resolution", "512"),
+        ("shading.shadow_resolution", "1024"),
         ("light.flux", "125.0"),
         ("light.centre", "[0.5, 0.5, 0.25]"),
         ("light.radius", "2.5"),
