@@ -11,15 +11,19 @@
 //! parallel slabs in `sheer-transport` (tests/two_slabs.rs, docs/perf/two-slab-shadow.md).
 //!
 //! Two realisations of the same rule:
-//! * on the GPU (every evaluation path but the baseline), a transmittance shadow map: [`SHADOW_LAYERS`]
-//!   depth-peeling passes from the light, each keeping the nearest surface behind the previous layer, and a
-//!   lookup with a slope-scaled bias and 2×2 percentage-closer filtering (`shaders/shadow.wgsl`);
+//! * on the GPU (the per-fragment and per-vertex paths), a transmittance shadow map: [`SHADOW_LAYERS`]
+//!   depth-peeling passes from the light, each keeping the nearest surface behind the previous layer, with
+//!   `t` and `D` per vertex of the caster; the lookup, per vertex of the receiver and interpolated, has a
+//!   slope-scaled bias and 2×2 percentage-closer filtering (`shaders/shadow.wgsl`);
 //! * on the CPU, [`ShadowCasters::light_transmission`]: the segment from the light to the point cast
 //!   against every triangle (through a grid over the light's view), exact to `f64` — the reference of the
 //!   GPU path's tests and the CPU evaluation path's shadows.
 //!
-//! One view from the light, not a cube map: the light-view frustum is the cone around the casters'
-//! bounding sphere, one pass per layer instead of six. A light inside that sphere (closer than its radius)
+//! Why these choices, measured on lavapipe with `sheer bench render` (docs/perf/shadows.md): one view
+//! from the light, not a cube map (one pass per layer instead of six); the frustum around the cloth's
+//! bounding sphere only (the pole is drawn into it where it lies between the light and the cloth); two
+//! layers, not four (a third layer's beam is below e^{−2τ1}, and each pass costs about 4 ms at 512²); the
+//! lookup per vertex (per fragment it cost as much again as the passes). A light inside the cloth's sphere
 //! gets a cone of at most [`MAX_HALF_ANGLE_DEGREES`] around the sphere's centre; points outside it receive
 //! the full beam on both realisations.
 
@@ -33,7 +37,7 @@ use super::slab_renderer::OpaqueMesh;
 use crate::sky::{DiffuseTable, diffuse_response_per_albedo};
 
 /// Surfaces recorded per shadow-map texel: a point behind more layers than this is attenuated by the
-/// nearest ones only.
+/// nearest ones only (the GPU; the CPU ray caster counts every layer).
 pub const SHADOW_LAYERS: usize = 2;
 
 /// The shadow map's default resolution (texels per side).
