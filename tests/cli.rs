@@ -854,3 +854,104 @@ fn slab_refuses_a_bad_model_a_bad_table_and_rows_outside_the_table() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_wrap_scene_wraps_the_flag_round_the_pole_and_keeps_it_off() {
+    use sheer_cloth::glam::DVec3;
+    let dir = scratch("wrap");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/wrap.scene.toml");
+    let frames = 240;
+    sheer_ok(&[
+        "simulate",
+        "--scene",
+        scene,
+        "--frames",
+        &frames.to_string(),
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    // The default pole: its axis 15 mm behind the hoist at x = 0, z = 0; free particles keep half the
+    // 4 mm thickness from its surface (OBJ coordinates are written in full: no rounding allowance).
+    let (radius, gap) = (0.015, 0.002);
+    let (mut touching_frames, mut crossing_frames, mut most_pairs) = (0, 0, 0);
+    for frame in 0..frames {
+        let text = std::fs::read_to_string(dir.join(format!("frame_{frame:04}.obj"))).unwrap();
+        let positions: Vec<DVec3> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("v "))
+            .map(|l| {
+                let c: Vec<f64> = l.split(' ').map(|c| c.parse().unwrap()).collect();
+                DVec3::new(c[0], c[1], c[2])
+            })
+            .collect();
+        let triangles: Vec<[u32; 3]> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("f "))
+            .map(|l| {
+                let v: Vec<u32> = l
+                    .split(' ')
+                    .map(|c| c.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        let pairs = sheer_cloth::intersecting_triangle_pairs(&positions, &triangles);
+        crossing_frames += usize::from(pairs > 0);
+        most_pairs = most_pairs.max(pairs);
+        // Column 0 is pinned at the pole's surface; every other particle keeps the gap.
+        let from_axis: Vec<f64> = positions
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| i % 64 != 0)
+            .map(|(_, x)| (x.x + radius).hypot(x.z))
+            .collect();
+        let nearest = from_axis.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(
+            nearest >= (radius + gap) * (1.0 - 1e-12),
+            "frame {frame}: {nearest} m"
+        );
+        touching_frames += usize::from(nearest < radius + gap + 0.001);
+    }
+    // The flag does wrap: it lies against the pole in most frames.
+    assert!(touching_frames > frames / 2, "{touching_frames} frames");
+    // Known limit (crates/sheer-cloth/README.md): without edge–edge contacts a few frames of this
+    // scene still show an edge through a triangle; the default flag shows none (sheer-cloth's tests).
+    println!(
+        "frames passing through itself: {crossing_frames} of {frames}, at most {most_pairs} pairs"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_collision_keys_are_refused_naming_the_key() {
+    let dir = scratch("bad-collisions");
+    for (text, key) in [
+        (
+            "[simulation.collisions]\nthickness = -0.001",
+            "simulation.collisions.thickness",
+        ),
+        (
+            "[simulation.collisions]\ncolliders = [{ kind = \"sphere\", center = [0.0, 0.0, 0.0], radius = 0.1 }, { kind = \"sphere\", center = [0.0, 0.0, 0.0], radius = nan }]",
+            "simulation.collisions.colliders[1].radius",
+        ),
+        (
+            "[simulation.collisions]\nself_collision = true\n[simulation.method]\nkind = \"verlet\"\nsubsteps = 200",
+            "position-based",
+        ),
+    ] {
+        let path = dir.join("bad.scene.toml");
+        std::fs::write(&path, text).unwrap();
+        let out = dir.join("frames");
+        let stderr = sheer_error(&[
+            "simulate",
+            "--scene",
+            path.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert!(stderr.contains(key), "{text}: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

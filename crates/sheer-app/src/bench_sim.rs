@@ -48,6 +48,10 @@ pub struct BenchSimArgs {
     /// or `off` (all three 0 N·s/m, which the position-based solvers skip on a grid).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub spring_damping: Switch,
+    /// Contacts: `none` (the default), `pole` (the default scene's pole capsule) or `self` (the pole
+    /// and self-collision, as `assets/wrap.scene.toml`); position-based methods only.
+    #[arg(long, value_enum, default_value_t = ContactCase::None)]
+    pub contacts: ContactCase,
     /// Minimum measuring time per case, seconds, in [0, 3600] (at least one frame is always timed).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
@@ -63,6 +67,15 @@ pub enum Switch {
     Off,
 }
 
+/// The contacts a `sheer bench sim` case resolves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ContactCase {
+    None,
+    Pole,
+    #[value(name = "self")]
+    SelfAndPole,
+}
+
 /// What `sheer bench sim` changes in the default flag besides the method and the grid.
 #[derive(Clone, Copy, Debug)]
 pub struct FlagOverrides {
@@ -71,6 +84,7 @@ pub struct FlagOverrides {
     /// `wind.renewal_interval`, s; `None`: the default flag's.
     pub wind_renewal_interval: Option<f64>,
     pub spring_damping: Switch,
+    pub contacts: ContactCase,
 }
 
 /// Longest `--seconds` of the benchmarks: an hour per case, so that a typo does not hang the program.
@@ -159,6 +173,19 @@ pub fn flag_simulation(
     }
     if overrides.spring_damping == Switch::Off {
         params.remove_spring_damping();
+    }
+    if overrides.contacts != ContactCase::None {
+        let scene = crate::scene::Scene::default();
+        let (start, end) = scene.pole_axis();
+        params
+            .collisions
+            .colliders
+            .push(sheer_cloth::Collider::Capsule {
+                start,
+                end,
+                radius: crate::scene::POLE_RADIUS,
+            });
+        params.collisions.self_collision = overrides.contacts == ContactCase::SelfAndPole;
     }
     Ok(Simulation::new(model, params)?)
 }
@@ -277,6 +304,7 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         parallel_min_particles: args.parallel_min_particles,
         wind_renewal_interval: args.wind_renewal_interval,
         spring_damping: args.spring_damping,
+        contacts: args.contacts,
     };
     // Two-thread figures depend on how far apart the host has put the cores: measured before and after
     // the runs, and printed beside them (to stderr, so that the CSV stays CSV).

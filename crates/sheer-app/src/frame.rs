@@ -194,11 +194,13 @@ impl FlagScene {
         &mut self,
         params: sheer_cloth::SimParams,
     ) -> Result<(), CliError> {
-        if let Some(sim) = &mut self.simulation {
-            sim.set_params(params.clone())
-                .map_err(|e| CliError::new(e.to_string()))?;
+        let previous = std::mem::replace(&mut self.scene.simulation, params);
+        if let Some(sim) = &mut self.simulation
+            && let Err(e) = sim.set_params(self.scene.simulation_params())
+        {
+            self.scene.simulation = previous;
+            return Err(CliError::new(e.to_string()));
         }
-        self.scene.simulation = params;
         Ok(())
     }
 }
@@ -621,24 +623,22 @@ pub fn camera(scene: &Scene) -> Camera {
     }
 }
 
-/// Radius of the flag pole, m.
-const POLE_RADIUS: f32 = 0.015;
-
 /// The pole's diffuse albedo: a pale wood.
 const POLE_ALBEDO: [f32; 3] = [0.45, 0.4, 0.325];
 
-/// The flag pole along the hoist edge: an opaque, diffuse vertical cylinder from 6 cm above the hoist
-/// to 1.5 m below the flag's foot, lit by the point light and the sky like everything else.
+/// The flag pole along the hoist edge (`Scene::pole_axis`): an opaque, diffuse cylinder lit by the
+/// point light and the sky like everything else.
 fn pole(scene: &Scene) -> Result<OpaqueMesh, CliError> {
-    let origin = Vec3::new(
-        scene.flag.origin.x as f32,
-        scene.flag.origin.y as f32,
-        scene.flag.origin.z as f32,
-    );
-    let top = origin + Vec3::new(0.0, 0.06, 0.0);
-    let bottom = origin - Vec3::new(0.0, scene.flag.height as f32 + 1.5, 0.0);
-    OpaqueMesh::cylinder(bottom, top, POLE_RADIUS, 24, POLE_ALBEDO)
-        .map_err(|e| CliError::new(format!("flag pole: {e}")))
+    let (bottom, top) = scene.pole_axis();
+    let to_f32 = |v: sheer_cloth::glam::DVec3| Vec3::new(v.x as f32, v.y as f32, v.z as f32);
+    OpaqueMesh::cylinder(
+        to_f32(bottom),
+        to_f32(top),
+        crate::scene::POLE_RADIUS as f32,
+        24,
+        POLE_ALBEDO,
+    )
+    .map_err(|e| CliError::new(format!("flag pole: {e}")))
 }
 
 /// The marker's disc, linear W/(m²·sr): a warm white well above the flag's radiance.

@@ -302,12 +302,30 @@ impl Default for StaticSheet {
     }
 }
 
+/// The flag pole along the hoist: drawn, and (position-based methods) a collider.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PoleSection {
+    /// Whether the flag collides with the pole (a capsule; position-based methods only).
+    pub collider: bool,
+}
+
+impl Default for PoleSection {
+    fn default() -> Self {
+        PoleSection { collider: true }
+    }
+}
+
+/// Radius of the flag pole, m.
+pub const POLE_RADIUS: f64 = 0.015;
+
 /// A whole scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Scene {
     pub flag: GridSpec,
     pub simulation: SimParams,
+    pub pole: PoleSection,
     pub shading: ShadingSection,
     pub light: LightSection,
     pub camera: CameraSection,
@@ -348,6 +366,34 @@ pub const BUILTIN_ASSETS: [(&str, &[u8]); 2] = [
     ),
 ];
 
+impl Scene {
+    /// The pole's axis, bottom to top (m): its surface touches the hoist, from 6 cm above the flag's
+    /// top to 1.5 m below its foot.
+    pub fn pole_axis(&self) -> (sheer_cloth::glam::DVec3, sheer_cloth::glam::DVec3) {
+        let axis_top = self.flag.origin + sheer_cloth::glam::DVec3::new(-POLE_RADIUS, 0.06, 0.0);
+        let bottom = axis_top - sheer_cloth::glam::DVec3::new(0.0, self.flag.height + 1.56, 0.0);
+        (bottom, axis_top)
+    }
+
+    /// The simulation's parameters with the pole's capsule among the colliders where `pole.collider`
+    /// asks for it and the method has contacts (position-based).
+    pub fn simulation_params(&self) -> SimParams {
+        let mut params = self.simulation.clone();
+        if self.pole.collider && params.method.is_position_based() {
+            let (start, end) = self.pole_axis();
+            params
+                .collisions
+                .colliders
+                .push(sheer_cloth::Collider::Capsule {
+                    start,
+                    end,
+                    radius: POLE_RADIUS,
+                });
+        }
+        params
+    }
+}
+
 impl Default for Scene {
     fn default() -> Self {
         // A fresh breeze across the flag at 27° from its plane, gusting and turbulent: enough to make it
@@ -356,6 +402,7 @@ impl Default for Scene {
         Scene {
             flag: GridSpec::default(),
             simulation,
+            pole: PoleSection::default(),
             shading: ShadingSection::default(),
             light: LightSection::default(),
             camera: CameraSection::default(),
@@ -689,6 +736,15 @@ impl Scene {
         // The model's own checks (cells with no area, …), in its words.
         sheer_cloth::ClothModel::grid(&self.flag)
             .map_err(|e| CliError::new(format!("scene: [flag]: {e}")))?;
+        for (i, collider) in self.simulation.collisions.colliders.iter().enumerate() {
+            collider.validate().map_err(|e| {
+                let key = e.name.trim_start_matches("collisions.colliders.");
+                CliError::new(format!(
+                    "scene: `simulation.collisions.colliders[{i}].{key}` = {}: {}",
+                    e.value, e.reason
+                ))
+            })?;
+        }
         self.simulation.validate().map_err(|e| {
             CliError::new(format!(
                 "scene: `simulation.{}` = {}: {}",
@@ -1249,6 +1305,14 @@ mod key_tests {
         ("simulation.wind.renewal_interval", "0.0"),
         ("simulation.divergence.max_speed", "150.0"),
         ("simulation.divergence.max_strain", "5.0"),
+        ("simulation.collisions.self_collision", "true"),
+        ("simulation.collisions.thickness", "0.005"),
+        ("simulation.collisions.friction", "0.5"),
+        (
+            "simulation.collisions.colliders",
+            "[{ kind = \"sphere\", center = [0.5, 0.0, 0.5], radius = 0.25 }]",
+        ),
+        ("pole.collider", "false"),
         ("shading.model", "\"split\""),
         ("shading.path", "\"vertex\""),
         ("shading.optical_thickness", "[1.5, 2.5, 3.0]"),

@@ -36,7 +36,7 @@ pub struct SimulateArgs {
 /// The flag of a scene, hoist edge pinned.
 pub fn flag_simulation(scene: &Scene) -> Result<Simulation, CliError> {
     let model = ClothModel::grid(&scene.flag).and_then(|m| m.with_hoist_pinned())?;
-    Ok(Simulation::new(model, scene.simulation.clone())?)
+    Ok(Simulation::new(model, scene.simulation_params())?)
 }
 
 /// Texture coordinates of grid particles: u along the flag from the hoist, v down from the top.

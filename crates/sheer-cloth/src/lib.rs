@@ -29,6 +29,7 @@
 // with a `// SAFETY:` comment: parallel passes write disjoint parts of one buffer through `DisjointSlice`
 // (a colouring or a partition guarantees no index is touched by two threads at once), and the AVX-512
 // strips use raw-pointer loads and stores. `vectorise::by_cpu!` allows its own dispatch blocks.
+mod collision;
 #[allow(unsafe_code)]
 mod components;
 mod error;
@@ -36,6 +37,7 @@ mod error;
 mod grid_constraints;
 #[allow(unsafe_code)]
 mod grid_wind;
+mod intersections;
 mod mass_spring;
 mod model;
 mod nearest;
@@ -55,10 +57,12 @@ mod wavefront;
 pub mod wind;
 
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};
+pub use intersections::intersecting_triangle_pairs;
 pub use model::{ClothModel, GridShape, GridSpec, Spring, SpringKind};
 pub use parallel::thread_handoff_latency;
 pub use params::{
-    DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, DivergenceLimits, Method, SimParams, SpringParams, Wind,
+    Collider, Collisions, DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, DivergenceLimits, Method, SimParams,
+    SpringParams, Wind,
 };
 pub use sim::{SetupError, Simulation, StepInfo, StrainStatistics};
 

@@ -607,6 +607,120 @@ pub struct SimParams {
     /// rayon's pool starts to pay) on one thread, so that a small cloth does not take a second core
     /// unasked, e.g. from the app's renderer.
     pub parallel_min_particles: usize,
+    /// Position-based methods only: contacts of the cloth with itself and with colliders. Off by
+    /// default (no self-collision, no colliders); a force-based method with either on is refused.
+    pub collisions: Collisions,
+}
+
+/// Contacts of the cloth with itself and with rigid colliders, resolved as position constraints
+/// every sub-step of a position-based method (`collision.rs`). A force-based method with any contact
+/// switched on is refused by [`SimParams::validate`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Collisions {
+    /// Whether the cloth collides with itself: every particle keeps `thickness` from every triangle,
+    /// and every edge from every edge, that it does not touch at rest.
+    pub self_collision: bool,
+    /// The cloth's thickness, m: the gap self-contacts keep between layers, and twice the gap kept
+    /// from a collider's surface. Light flag fabric is a fraction of a millimetre thick; the default
+    /// 4 mm is a cushion that the default flag's particles cannot cross in one sub-step.
+    pub thickness: f64,
+    /// Coulomb friction coefficient of the cloth on colliders (dimensionless, ≥ 0): a particle in
+    /// contact stops sliding while its tangential motion over a sub-step is at most `friction` times
+    /// the depth it was pushed out by (Macklin et al. 2014, "Unified particle physics", §6.1).
+    pub friction: f64,
+    /// Rigid obstacles, fixed in space (move them between steps with
+    /// [`Simulation::set_params`](crate::Simulation::set_params)).
+    pub colliders: Vec<Collider>,
+}
+
+impl Default for Collisions {
+    fn default() -> Self {
+        Collisions {
+            self_collision: false,
+            thickness: 0.004,
+            friction: 0.3,
+            colliders: Vec::new(),
+        }
+    }
+}
+
+impl Collisions {
+    /// Whether any contact is switched on.
+    pub fn any(&self) -> bool {
+        self.self_collision || !self.colliders.is_empty()
+    }
+
+    /// Checks every field; the error names the first bad one (a collider's key without its index:
+    /// [`Collider::validate`] checks one collider).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        positive("collisions.thickness", self.thickness)?;
+        non_negative("collisions.friction", self.friction)?;
+        self.colliders.iter().try_for_each(Collider::validate)
+    }
+}
+
+/// A rigid obstacle the cloth cannot enter: its particles keep half the cloth's thickness from its
+/// surface. Serialised as a table with `kind` (`{ kind = "sphere", center = [0, 0, 0], radius = 0.2 }`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Collider {
+    /// A ball: centre (m) and radius (m).
+    Sphere {
+        /// Centre, m.
+        center: DVec3,
+        /// Radius, m (> 0).
+        radius: f64,
+    },
+    /// A capsule (a segment swept by a ball), such as a flag pole: the segment's ends (m) and radius (m).
+    Capsule {
+        /// One end of the axis, m.
+        start: DVec3,
+        /// The other end of the axis, m.
+        end: DVec3,
+        /// Radius, m (> 0).
+        radius: f64,
+    },
+    /// A half-space, such as the ground: a point on its surface (m) and the normal pointing out of it
+    /// (any length > 0; normalised when used).
+    Plane {
+        /// A point on the surface, m.
+        point: DVec3,
+        /// The outward normal (towards where the cloth may be).
+        normal: DVec3,
+    },
+}
+
+impl Collider {
+    /// Checks this collider's fields; the error names the key within the collider's table, e.g.
+    /// `"collisions.colliders.radius"`.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        match *self {
+            Collider::Sphere { center, radius } => {
+                finite_vec("collisions.colliders.center", center)?;
+                positive("collisions.colliders.radius", radius)
+            }
+            Collider::Capsule { start, end, radius } => {
+                finite_vec("collisions.colliders.start", start)?;
+                finite_vec("collisions.colliders.end", end)?;
+                positive("collisions.colliders.radius", radius)
+            }
+            Collider::Plane { point, normal } => {
+                finite_vec("collisions.colliders.point", point)?;
+                finite_vec("collisions.colliders.normal", normal)?;
+                let length = normal.length();
+                if length > 0.0 && length.is_finite() {
+                    Ok(())
+                } else {
+                    Err(ParamError::new(
+                        "collisions.colliders.normal",
+                        length,
+                        "must have a finite length > 0",
+                    ))
+                }
+            }
+        }
+    }
 }
 
 impl Default for SimParams {
@@ -622,6 +736,7 @@ impl Default for SimParams {
             long_range_attachments: true,
             divergence: DivergenceLimits::default(),
             parallel_min_particles: 16_384,
+            collisions: Collisions::default(),
         }
     }
 }
@@ -664,6 +779,15 @@ impl SimParams {
         self.wind.validate()?;
         positive("divergence.max_speed", self.divergence.max_speed)?;
         positive("divergence.max_strain", self.divergence.max_strain)?;
+        self.collisions.validate()?;
+        if self.collisions.any() && !self.method.is_position_based() {
+            return Err(ParamError::new(
+                "collisions.self_collision",
+                1.0,
+                "contacts need a position-based method (pbd, xpbd, small_steps_xpbd): switch \
+                 collisions off (self_collision = false, no colliders) for a force-based one",
+            ));
+        }
         Ok(())
     }
 }

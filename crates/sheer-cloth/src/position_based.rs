@@ -563,7 +563,9 @@ impl Simulation {
             GridSweep::Auto => !small && !pipeline,
             _ => false,
         };
+        // Contacts are projected between sub-steps (`Simulation::project_contacts`).
         let eligible = !multipliers
+            && !self.params.collisions.any()
             && self.grid_constraints.is_some()
             && (pipeline || wavefront)
             && !(self.wind_acts() && self.grid_triangulation.is_none());

@@ -9,6 +9,7 @@ use std::ops::Range;
 
 use glam::{DAffine3, DVec3, Vec3};
 
+use crate::collision::Contacts;
 use crate::components::Xyz;
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
 use crate::grid_constraints::GridConstraints;
@@ -234,6 +235,8 @@ pub struct Simulation {
     /// Whether the next pass of two opposed parts sweeps part 0 upwards: they turn round every pass,
     /// from step to step too, so that each pass starts on the rows the one before ended on.
     pub(crate) opposed_upward_first: bool,
+    /// The contact pairs and their scratch (`collision.rs`).
+    pub(crate) contacts: Contacts,
 }
 
 /// What the rows of a grid's first pass add to each particle's body force
@@ -474,6 +477,7 @@ impl Simulation {
             team: TeamSlot::default(),
             progress: Progress::default(),
             pipeline_plan: PlanCache::default(),
+            contacts: Contacts::default(),
         })
     }
 
@@ -560,6 +564,9 @@ impl Simulation {
                     }
                     Method::SmallStepsXpbd { .. } => self.position_based_substep(h, t, 1, None),
                 }
+                if self.params.collisions.any() {
+                    self.project_contacts(h);
+                }
                 self.place_pins(s, substeps);
             }
             if split {
@@ -615,6 +622,49 @@ impl Simulation {
                 self.split_positions.set(i, at);
             } else {
                 self.positions[i] = at;
+            }
+        }
+    }
+
+    /// Projects the contacts of a position-based sub-step of `h` (s) on the split state, and adds what
+    /// they moved a particle over `h` to its velocity: as if projected before the velocity update.
+    pub(crate) fn project_contacts(&mut self, h: f64) {
+        let Simulation {
+            params,
+            contacts,
+            rest_positions,
+            inverse_masses,
+            triangles,
+            split_positions,
+            split_velocities,
+            previous_positions,
+            ..
+        } = self;
+        let n = rest_positions.len();
+        contacts.start.resize(n, DVec3::ZERO);
+        contacts.now.resize(n, DVec3::ZERO);
+        previous_positions.join_into(&mut contacts.start);
+        split_positions.join_into(&mut contacts.now);
+        contacts.project(
+            &params.collisions,
+            rest_positions,
+            inverse_masses,
+            triangles,
+        );
+        for (i, &after) in contacts.now.iter().enumerate() {
+            let before = DVec3::new(
+                split_positions.x[i],
+                split_positions.y[i],
+                split_positions.z[i],
+            );
+            if after != before {
+                split_positions.set(i, after);
+                let v = DVec3::new(
+                    split_velocities.x[i],
+                    split_velocities.y[i],
+                    split_velocities.z[i],
+                );
+                split_velocities.set(i, v + (after - before) / h);
             }
         }
     }

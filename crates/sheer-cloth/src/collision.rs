@@ -1,0 +1,514 @@
+//! Contacts: the cloth against itself and against rigid colliders, as position constraints projected
+//! once a sub-step after the springs (Müller, Heidelberger, Hennix & Ratcliff 2007, §3.3 and §4.2:
+//! collision constraints are inequality constraints projected like any other).
+//!
+//! **Self-contacts** (Bridson, Fedkiw & Anderson 2002, "Robust treatment of collisions, contact and
+//! friction for cloth animation", §6: point–triangle proximity): every particle keeps `thickness`
+//! (m) from every triangle it is not a corner of, on the side of the triangle it was on at the start of
+//! the sub-step, so a particle that crossed a triangle during the sub-step is put back, not pushed on
+//! through. Pairs closer than the thickness at rest (neighbours in the fabric) never touch.
+//!
+//! **Broad phase**: a spatial hash of the particles (Teschner, Heidelberger, Müller, Pomeranets &
+//! Gross 2003), queried with each triangle's box, listing the pairs within `thickness + skin`. The list
+//! is rebuilt only once some particle has moved more than `skin / 2` since it was built: a pair not
+//! listed was then at least `thickness + skin` apart, and the distance between a point and a triangle
+//! changes by at most twice the largest displacement of its four particles, so it is still at least
+//! `thickness` apart.
+//!
+//! **Colliders** (spheres, capsules, planes): every free particle keeps `thickness / 2` from the
+//! surface, with Coulomb friction on its motion along the surface (Macklin, Müller, Chentanez & Kim
+//! 2014, "Unified particle physics for real-time applications", §6.1).
+//!
+//! Everything here runs on one thread in a fixed order: the same state gives the same bits whatever
+//! the thread count.
+
+use glam::DVec3;
+
+use crate::params::{Collider, Collisions};
+
+/// How far beyond the thickness the broad phase looks, as a multiple of the thickness: a larger skin
+/// rebuilds the list less often but lists more pairs for every sub-step to check.
+const SKIN_PER_THICKNESS: f64 = 1.0;
+
+/// The spatial hash's cell side, as a multiple of the reach: larger cells mean fewer cells a
+/// triangle's box overlaps, more particles in each.
+const CELL_PER_REACH: f64 = 4.0;
+
+/// The candidate contact pairs of a cloth and the scratch the projection works in.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Contacts {
+    /// Where the particles were when `point_triangle` was listed (empty: not listed yet).
+    listed_at: Vec<DVec3>,
+    /// The thickness (m) the list was made for.
+    listed_thickness: f64,
+    /// Particle–triangle pairs within `thickness + skin` when listed, apart at rest.
+    point_triangle: Vec<(u32, u32)>,
+    /// The spatial hash of the particles, rebuilt with the list.
+    hash: SpatialHash,
+    /// Positions at the start of the sub-step and now (m), joined from the solver's split state.
+    pub(crate) start: Vec<DVec3>,
+    pub(crate) now: Vec<DVec3>,
+}
+
+impl Contacts {
+    /// Projects every contact of `collisions` once, moving the particles in `now` (m) whose inverse
+    /// mass is > 0; `start` holds where they were at the start of the sub-step. `rest` is the rest
+    /// shape (m), `triangles` the cloth's triangles.
+    pub(crate) fn project(
+        &mut self,
+        collisions: &Collisions,
+        rest: &[DVec3],
+        inverse_masses: &[f64],
+        triangles: &[[u32; 3]],
+    ) {
+        if collisions.self_collision {
+            let skin = SKIN_PER_THICKNESS * collisions.thickness;
+            if self.list_is_stale(collisions.thickness, skin) {
+                self.list_pairs(collisions.thickness, skin, rest, triangles);
+            }
+            let Contacts {
+                point_triangle,
+                start,
+                now,
+                ..
+            } = self;
+            for &(p, t) in point_triangle.iter() {
+                let [a, b, c] = triangles[t as usize].map(|i| i as usize);
+                keep_point_off_triangle(
+                    [p as usize, a, b, c],
+                    collisions.thickness,
+                    inverse_masses,
+                    start,
+                    now,
+                );
+            }
+        }
+        // Colliders last: nothing ends a sub-step inside one.
+        for collider in &collisions.colliders {
+            let gap = collisions.thickness / 2.0;
+            let (low, high) = collider.bounds(gap);
+            for (i, x) in self.now.iter_mut().enumerate() {
+                if inverse_masses[i] > 0.0 && x.cmpge(low).all() && x.cmple(high).all() {
+                    *x = kept_off_collider(collider, gap, collisions.friction, self.start[i], *x);
+                }
+            }
+        }
+    }
+
+    /// Whether a particle has moved more than `skin / 2` since the pairs were listed (or they never
+    /// were, or for another thickness).
+    fn list_is_stale(&self, thickness: f64, skin: f64) -> bool {
+        let limit = (skin / 2.0) * (skin / 2.0);
+        self.listed_thickness != thickness
+            || self.listed_at.len() != self.now.len()
+            || self
+                .listed_at
+                .iter()
+                .zip(&self.now)
+                .any(|(a, b)| a.distance_squared(*b) > limit)
+    }
+
+    /// Lists the particle–triangle pairs within `thickness + skin` (m) now and at least `thickness`
+    /// apart at rest, in triangle order.
+    fn list_pairs(&mut self, thickness: f64, skin: f64, rest: &[DVec3], triangles: &[[u32; 3]]) {
+        let reach = thickness + skin;
+        self.hash.build(&self.now, CELL_PER_REACH * reach);
+        self.point_triangle.clear();
+        for (t, triangle) in triangles.iter().enumerate() {
+            let corners = triangle.map(|i| self.now[i as usize]);
+            let low = corners[0].min(corners[1]).min(corners[2]) - DVec3::splat(reach);
+            let high = corners[0].max(corners[1]).max(corners[2]) + DVec3::splat(reach);
+            // A ball around the centroid holding the triangle and its reach: a cheap first test.
+            let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
+            let ball = corners
+                .iter()
+                .map(|c| c.distance_squared(centroid))
+                .fold(0.0, f64::max)
+                .sqrt()
+                + reach;
+            self.hash.for_each_in_box(low, high, |p| {
+                let x = self.now[p as usize];
+                if triangle.contains(&p) || x.distance_squared(centroid) > ball * ball {
+                    return;
+                }
+                if (x - closest_point_on_triangle(x, corners).0).length() >= reach {
+                    return;
+                }
+                let rest_corners = triangle.map(|i| rest[i as usize]);
+                let at_rest = rest[p as usize];
+                let rest_distance =
+                    (at_rest - closest_point_on_triangle(at_rest, rest_corners).0).length();
+                if rest_distance >= thickness {
+                    self.point_triangle.push((p, t as u32));
+                }
+            });
+        }
+        self.listed_at.clone_from(&self.now);
+        self.listed_thickness = thickness;
+    }
+}
+
+impl Collider {
+    /// The box (m) outside which a particle is farther than `gap` (m) from this collider (unbounded
+    /// for a plane).
+    fn bounds(&self, gap: f64) -> (DVec3, DVec3) {
+        match *self {
+            Collider::Sphere { center, radius } => {
+                let r = DVec3::splat(radius + gap);
+                (center - r, center + r)
+            }
+            Collider::Capsule { start, end, radius } => {
+                let r = DVec3::splat(radius + gap);
+                (start.min(end) - r, start.max(end) + r)
+            }
+            Collider::Plane { .. } => (DVec3::NEG_INFINITY, DVec3::INFINITY),
+        }
+    }
+}
+
+/// Keeps particle `p` at least `thickness` (m) from triangle `(a, b, c)` on the side it started the
+/// sub-step on: the constraint `C = s n·(x_p − Σ βᵢ x_i) − thickness ≥ 0`, with `n` the triangle's unit
+/// normal now, `s` the side at the start and `β` the barycentric coordinates of the closest point,
+/// projected with the particles' inverse masses (Müller et al. 2007, eq. (2)–(4) with stiffness 1).
+/// Beside the triangle (closest to an edge or corner) it keeps the distance along the offset instead.
+fn keep_point_off_triangle(
+    [p, a, b, c]: [usize; 4],
+    thickness: f64,
+    inverse_masses: &[f64],
+    start: &[DVec3],
+    now: &mut [DVec3],
+) {
+    let corners = [now[a], now[b], now[c]];
+    let (closest, weights) = closest_point_on_triangle(now[p], corners);
+    let offset = now[p] - closest;
+    let distance = offset.length();
+    let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+    let start_normal = (start[b] - start[a]).cross(start[c] - start[a]);
+    let Some(normal) = normal.try_normalize() else {
+        return; // a triangle crushed to a line has no sides
+    };
+    let start_height = start_normal.dot(start[p] - start[a]);
+    let side = if start_height != 0.0 {
+        start_height.signum()
+    } else {
+        normal.dot(offset).signum()
+    };
+    // Over the face: along the normal, on the start side. Beside it: straight away from its edge.
+    let inside = weights.iter().all(|&w| w > 0.0);
+    let direction = if inside {
+        side * normal
+    } else if distance < thickness && distance > 0.0 {
+        offset / distance
+    } else {
+        return;
+    };
+    let constraint = direction.dot(offset) - thickness;
+    if constraint >= 0.0 {
+        return;
+    }
+    let w = [
+        inverse_masses[p],
+        inverse_masses[a],
+        inverse_masses[b],
+        inverse_masses[c],
+    ];
+    let divisor =
+        w[0] + w[1] * weights[0].powi(2) + w[2] * weights[1].powi(2) + w[3] * weights[2].powi(2);
+    if divisor <= 0.0 {
+        return;
+    }
+    let push = -constraint / divisor * direction;
+    now[p] += w[0] * push;
+    for (k, &i) in [a, b, c].iter().enumerate() {
+        now[i] -= w[k + 1] * weights[k] * push;
+    }
+}
+
+/// Where a particle that was at `start` and is now at `x` (m) ends up when kept `gap` (m) outside
+/// `collider`: pushed out along the surface normal, then its motion along the surface over the
+/// sub-step cancelled while it is at most `friction` times the push (static friction), else shortened
+/// by that much (kinetic), after Macklin et al. 2014, eq. (24).
+fn kept_off_collider(
+    collider: &Collider,
+    gap: f64,
+    friction: f64,
+    start: DVec3,
+    x: DVec3,
+) -> DVec3 {
+    let (surface_point, normal) = match *collider {
+        Collider::Sphere { center, radius } => match (x - center).try_normalize() {
+            Some(n) => (center + radius * n, n),
+            None => return x, // at the exact centre no direction is outward
+        },
+        Collider::Capsule {
+            start: a,
+            end: b,
+            radius,
+        } => {
+            let axis = b - a;
+            let along = if axis.length_squared() > 0.0 {
+                ((x - a).dot(axis) / axis.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let on_axis = a + along * axis;
+            match (x - on_axis).try_normalize() {
+                Some(n) => (on_axis + radius * n, n),
+                None => return x,
+            }
+        }
+        Collider::Plane { point, normal } => (point, normal.normalize()),
+    };
+    let depth = gap - normal.dot(x - surface_point);
+    if depth <= 0.0 {
+        return x;
+    }
+    let pushed = x + depth * normal;
+    let motion = pushed - start;
+    let sliding = motion - normal.dot(motion) * normal;
+    let slide = sliding.length();
+    let stop = friction * depth;
+    if slide <= stop {
+        pushed - sliding
+    } else {
+        pushed - sliding * (stop / slide)
+    }
+}
+
+/// The point of triangle `corners` closest to `x` (m), with its barycentric coordinates (Ericson 2005,
+/// *Real-Time Collision Detection*, §5.1.5).
+pub(crate) fn closest_point_on_triangle(x: DVec3, [a, b, c]: [DVec3; 3]) -> (DVec3, [f64; 3]) {
+    let (ab, ac, ap) = (b - a, c - a, x - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, [1.0, 0.0, 0.0]);
+    }
+    let bp = x - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, [0.0, 1.0, 0.0]);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (a + v * ab, [1.0 - v, v, 0.0]);
+    }
+    let cp = x - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, [0.0, 0.0, 1.0]);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (a + w * ac, [1.0 - w, 0.0, w]);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + w * (c - b), [0.0, 1.0 - w, w]);
+    }
+    let denominator = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denominator, vc * denominator);
+    (a + v * ab + w * ac, [1.0 - v - w, v, w])
+}
+
+/// Particles binned by cubic cell, the cells hashed into a table twice the particle count (Teschner
+/// et al. 2003), sorted by bucket so that each bucket's particles are one run, in index order.
+#[derive(Clone, Debug, Default)]
+struct SpatialHash {
+    cell: f64,
+    /// `starts[k]..starts[k + 1]` are the entries of bucket `k` in `particles`.
+    starts: Vec<u32>,
+    particles: Vec<u32>,
+    cells: Vec<[i64; 3]>,
+}
+
+impl SpatialHash {
+    fn build(&mut self, positions: &[DVec3], cell: f64) {
+        self.cell = cell;
+        let buckets = (2 * positions.len()).next_power_of_two().max(2);
+        self.cells.clear();
+        self.cells
+            .extend(positions.iter().map(|&x| cell_of(x, cell)));
+        self.starts.clear();
+        self.starts.resize(buckets + 1, 0);
+        for c in &self.cells {
+            self.starts[bucket(*c, buckets) + 1] += 1;
+        }
+        for k in 0..buckets {
+            self.starts[k + 1] += self.starts[k];
+        }
+        let mut next = self.starts.clone();
+        self.particles.clear();
+        self.particles.resize(positions.len(), 0);
+        for (i, c) in self.cells.iter().enumerate() {
+            let k = bucket(*c, buckets);
+            self.particles[next[k] as usize] = i as u32;
+            next[k] += 1;
+        }
+    }
+
+    /// Calls `visit` once for every particle whose cell overlaps the box `low..high` (m).
+    fn for_each_in_box(&self, low: DVec3, high: DVec3, mut visit: impl FnMut(u32)) {
+        let buckets = self.starts.len() - 1;
+        let (from, to) = (cell_of(low, self.cell), cell_of(high, self.cell));
+        for i in from[0]..=to[0] {
+            for j in from[1]..=to[1] {
+                for k in from[2]..=to[2] {
+                    let b = bucket([i, j, k], buckets);
+                    for &p in &self.particles[self.starts[b] as usize..self.starts[b + 1] as usize]
+                    {
+                        // Another cell can share the bucket: visit each particle from its own cell only.
+                        if self.cells[p as usize] == [i, j, k] {
+                            visit(p);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn cell_of(x: DVec3, cell: f64) -> [i64; 3] {
+    (x / cell).floor().to_array().map(|c| c as i64)
+}
+
+/// Teschner et al. 2003's hash of a cell (three large primes, XOR), reduced to `buckets` (a power of two).
+fn bucket([i, j, k]: [i64; 3], buckets: usize) -> usize {
+    let h =
+        (i.wrapping_mul(73_856_093)) ^ (j.wrapping_mul(19_349_663)) ^ (k.wrapping_mul(83_492_791));
+    (h as u64 as usize) & (buckets - 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_closest_point_agrees_with_a_fine_search_of_the_triangle() {
+        let corners = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.2, 0.1),
+            DVec3::new(0.3, 0.9, -0.2),
+        ];
+        for x in [
+            DVec3::new(0.3, 0.3, 0.5),
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.8, 0.8, 0.1),
+            DVec3::new(0.0, 2.0, 1.0),
+            DVec3::new(0.5, -0.5, 0.0),
+        ] {
+            let (closest, weights) = closest_point_on_triangle(x, corners);
+            let from_weights =
+                weights[0] * corners[0] + weights[1] * corners[1] + weights[2] * corners[2];
+            assert!((closest - from_weights).length() < 1e-12);
+            // Sample the triangle on a 400-step barycentric lattice: none is closer.
+            let n = 400;
+            let mut best = f64::INFINITY;
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                    let y =
+                        corners[0] + u * (corners[1] - corners[0]) + v * (corners[2] - corners[0]);
+                    best = best.min((x - y).length());
+                }
+            }
+            let found = (x - closest).length();
+            // The lattice is at most one cell diagonal (√2 · 1.1 / 400 m) from any point of the triangle.
+            assert!(
+                found <= best + 1e-12 && best - found <= 2.0 * 1.1 / n as f64,
+                "{x}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_particle_that_crossed_a_triangle_goes_back_to_its_side() {
+        let start = vec![
+            DVec3::new(0.3, 0.3, 0.01),
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ];
+        let mut now = start.clone();
+        now[0].z = -0.002; // crossed during the sub-step
+        keep_point_off_triangle([0, 1, 2, 3], 0.004, &[1.0, 0.0, 0.0, 0.0], &start, &mut now);
+        assert!((now[0].z - 0.004).abs() < 1e-15, "{}", now[0]);
+        // Free corners share the correction in proportion to their weights: momentum is kept.
+        let mut now = start.clone();
+        now[0].z = -0.002;
+        keep_point_off_triangle([0, 1, 2, 3], 0.004, &[1.0; 4], &start, &mut now);
+        let moved: DVec3 = now.iter().zip(&start).map(|(x, s)| *x - *s).sum();
+        assert!((moved.z - (-0.012)).abs() < 1e-15, "{moved}");
+        let height = now[0].z - (now[1].z + now[2].z + now[3].z) / 3.0;
+        assert!(height > 0.0);
+    }
+
+    #[test]
+    fn a_collider_pushes_a_particle_out_and_friction_holds_it() {
+        let ball = Collider::Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
+        // Straight in: out to the gap, no sliding.
+        let x = kept_off_collider(
+            &ball,
+            0.01,
+            0.5,
+            DVec3::new(0.0, 1.2, 0.0),
+            DVec3::new(0.0, 0.9, 0.0),
+        );
+        assert!((x - DVec3::new(0.0, 1.01, 0.0)).length() < 1e-15);
+        // A slide shorter than friction × depth stops; a long one is shortened by that much.
+        let x = kept_off_collider(
+            &ball,
+            0.0,
+            0.5,
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.01, 0.9, 0.0),
+        );
+        // Cancelled along the tangent at the pushed point: off the curved surface by second order.
+        assert!((x - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-4, "{x}");
+        let plane = Collider::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::new(0.0, 2.0, 0.0),
+        };
+        let x = kept_off_collider(
+            &plane,
+            0.0,
+            0.5,
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, -0.1, 0.0),
+        );
+        assert!((x - DVec3::new(0.95, 0.0, 0.0)).length() < 1e-15, "{x}");
+        // Frictionless: the slide is kept.
+        let x = kept_off_collider(&plane, 0.0, 0.0, DVec3::ZERO, DVec3::new(1.0, -0.1, 0.0));
+        assert_eq!(x, DVec3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn the_hash_finds_every_particle_in_a_box() {
+        let positions: Vec<DVec3> = (0..500)
+            .map(|i| {
+                let f = i as f64;
+                DVec3::new((f * 0.37).sin(), (f * 0.71).cos(), (f * 0.13).sin() * 0.5)
+            })
+            .collect();
+        let mut hash = SpatialHash::default();
+        hash.build(&positions, 0.1);
+        let (low, high) = (DVec3::new(-0.3, -0.2, -0.1), DVec3::new(0.4, 0.5, 0.2));
+        let mut found = Vec::new();
+        hash.for_each_in_box(low, high, |p| found.push(p));
+        found.sort_unstable();
+        let inside: Vec<u32> = (0..500u32)
+            .filter(|&i| {
+                let x = positions[i as usize];
+                x.cmpge(low).all() && x.cmple(high).all()
+            })
+            .collect();
+        assert!(inside.iter().all(|i| found.binary_search(i).is_ok()));
+        assert!(found.windows(2).all(|w| w[0] < w[1]), "each particle once");
+    }
+}
