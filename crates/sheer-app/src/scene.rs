@@ -367,10 +367,12 @@ pub const BUILTIN_ASSETS: [(&str, &[u8]); 2] = [
 ];
 
 impl Scene {
-    /// The pole's axis, bottom to top (m): its surface touches the hoist, from 6 cm above the flag's
-    /// top to 1.5 m below its foot.
+    /// The pole's axis, bottom to top (m), from 6 cm above the flag's top to 1.5 m below its foot:
+    /// behind the hoist by the radius and half the cloth's thickness, the distance contacts keep, so
+    /// that the flag at rest touches it nowhere however fine its grid.
     pub fn pole_axis(&self) -> (sheer_cloth::glam::DVec3, sheer_cloth::glam::DVec3) {
-        let axis_top = self.flag.origin + sheer_cloth::glam::DVec3::new(-POLE_RADIUS, 0.06, 0.0);
+        let behind = POLE_RADIUS + self.simulation.collisions.thickness / 2.0;
+        let axis_top = self.flag.origin + sheer_cloth::glam::DVec3::new(-behind, 0.06, 0.0);
         let bottom = axis_top - sheer_cloth::glam::DVec3::new(0.0, self.flag.height + 1.56, 0.0);
         (bottom, axis_top)
     }

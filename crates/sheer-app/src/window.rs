@@ -644,7 +644,29 @@ impl SheerApp {
             if method != params.method {
                 params.method = method;
                 self.fields.show_method(method);
+                // Force-based methods have no contacts: the switch goes off with them, said aloud.
+                if !method.is_position_based() && params.collisions.self_collision {
+                    params.collisions.self_collision = false;
+                    self.notice = Some(format!(
+                        "self-collision switched off: {} has no contacts",
+                        method.name()
+                    ));
+                }
                 if let Err(e) = self.flag.set_simulation_params(params) {
+                    self.notice = Some(e.to_string());
+                }
+            }
+            if self.flag.scene.simulation.method.is_position_based() {
+                let mut params = self.flag.scene.simulation.clone();
+                if ui
+                    .checkbox(&mut params.collisions.self_collision, "self-collision")
+                    .on_hover_text(
+                        "no layer of the flag passes through another; costs many times the \
+                         simulation (docs/perf/collisions.md)",
+                    )
+                    .changed()
+                    && let Err(e) = self.flag.set_simulation_params(params)
+                {
                     self.notice = Some(e.to_string());
                 }
             }

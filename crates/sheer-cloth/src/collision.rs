@@ -3,17 +3,20 @@
 //! collision constraints are inequality constraints projected like any other).
 //!
 //! **Self-contacts** (Bridson, Fedkiw & Anderson 2002, "Robust treatment of collisions, contact and
-//! friction for cloth animation", §6: point–triangle proximity): every particle keeps `thickness`
-//! (m) from every triangle it is not a corner of, on the side of the triangle it was on at the start of
-//! the sub-step, so a particle that crossed a triangle during the sub-step is put back, not pushed on
-//! through. Pairs closer than the thickness at rest (neighbours in the fabric) never touch.
+//! friction for cloth animation", §6: point–triangle and edge–edge proximity): every particle keeps
+//! `thickness` (m) from every triangle it is not a corner of, and every edge as far from every edge it
+//! shares no particle with, on the side it was on at the start of the sub-step, so that a particle or
+//! an edge that crossed during the sub-step is put back, not pushed on through. The distance between
+//! two triangles is reached at a corner and a face or at two edges, so the two kinds cover every way
+//! two triangles can approach. Pairs closer than the thickness at rest (neighbours in the fabric) never
+//! touch.
 //!
-//! **Broad phase**: a spatial hash of the particles (Teschner, Heidelberger, Müller, Pomeranets &
-//! Gross 2003), queried with each triangle's box, listing the pairs within `thickness + skin`. The list
-//! is rebuilt only once some particle has moved more than `skin / 2` since it was built: a pair not
-//! listed was then at least `thickness + skin` apart, and the distance between a point and a triangle
-//! changes by at most twice the largest displacement of its four particles, so it is still at least
-//! `thickness` apart.
+//! **Broad phase**: spatial hashes (Teschner, Heidelberger, Müller, Pomeranets & Gross 2003) of the
+//! particles, queried with each triangle's box, and of the edges' midpoints, listing the pairs within
+//! `thickness + skin`. The lists are rebuilt only once some particle has moved more than `skin / 2`
+//! since they were built: a pair not listed was then at least `thickness + skin` apart, and the
+//! distance between a point and a triangle, or between two segments, changes by at most twice the
+//! largest displacement of their four particles, so it is still at least `thickness` apart.
 //!
 //! **Colliders** (spheres, capsules, planes): every free particle keeps `thickness / 2` from the
 //! surface, with Coulomb friction on its motion along the surface (Macklin, Müller, Chentanez & Kim
@@ -23,12 +26,15 @@
 //! the thread count.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use crate::params::{Collider, Collisions};
 
 /// How far beyond the thickness the broad phase looks, as a multiple of the thickness: a larger skin
-/// rebuilds the list less often but lists more pairs for every sub-step to check.
-const SKIN_PER_THICKNESS: f64 = 1.0;
+/// rebuilds the lists less often but lists more pairs for every sub-step to check. 2 keeps the
+/// default flag's reach (12 mm) below the 12.4 mm between non-adjacent elements of its flat grid, so
+/// a flat flag lists nothing (docs/perf/collisions.md compares 1, 2 and 3).
+const SKIN_PER_THICKNESS: f64 = 2.0;
 
 /// The spatial hash's cell side, as a multiple of the reach: larger cells mean fewer cells a
 /// triangle's box overlaps, more particles in each.
@@ -43,8 +49,17 @@ pub(crate) struct Contacts {
     listed_thickness: f64,
     /// Particle–triangle pairs within `thickness + skin` when listed, apart at rest.
     point_triangle: Vec<(u32, u32)>,
-    /// The spatial hash of the particles, rebuilt with the list.
+    /// Pairs of edges (indices into `edges`, the lower first) within `thickness + skin` when listed,
+    /// sharing no particle, apart at rest.
+    edge_edge: Vec<(u32, u32)>,
+    /// The cloth's edges, each once, its particles in ascending order (built at the first listing).
+    edges: Vec<[u32; 2]>,
+    /// The spatial hashes of the particles and of the edges' midpoints, rebuilt with the lists.
     hash: SpatialHash,
+    edge_hash: SpatialHash,
+    /// Scratch: the edges' midpoints and half-lengths (m).
+    midpoints: Vec<DVec3>,
+    half_lengths: Vec<f64>,
     /// Positions at the start of the sub-step and now (m), joined from the solver's split state.
     pub(crate) start: Vec<DVec3>,
     pub(crate) now: Vec<DVec3>,
@@ -53,21 +68,25 @@ pub(crate) struct Contacts {
 impl Contacts {
     /// Projects every contact of `collisions` once, moving the particles in `now` (m) whose inverse
     /// mass is > 0; `start` holds where they were at the start of the sub-step. `rest` is the rest
-    /// shape (m), `triangles` the cloth's triangles.
+    /// shape (m), `triangles` the cloth's triangles; `parallel` lists the pairs on rayon's threads
+    /// (the same list; the projection runs on this thread, in the list's order).
     pub(crate) fn project(
         &mut self,
         collisions: &Collisions,
         rest: &[DVec3],
         inverse_masses: &[f64],
         triangles: &[[u32; 3]],
+        parallel: bool,
     ) {
         if collisions.self_collision {
             let skin = SKIN_PER_THICKNESS * collisions.thickness;
             if self.list_is_stale(collisions.thickness, skin) {
-                self.list_pairs(collisions.thickness, skin, rest, triangles);
+                self.list_pairs(collisions.thickness, skin, rest, triangles, parallel);
             }
             let Contacts {
                 point_triangle,
+                edge_edge,
+                edges,
                 start,
                 now,
                 ..
@@ -76,6 +95,17 @@ impl Contacts {
                 let [a, b, c] = triangles[t as usize].map(|i| i as usize);
                 keep_point_off_triangle(
                     [p as usize, a, b, c],
+                    collisions.thickness,
+                    inverse_masses,
+                    start,
+                    now,
+                );
+            }
+            for &(e, f) in edge_edge.iter() {
+                let [a, b] = edges[e as usize].map(|i| i as usize);
+                let [c, d] = edges[f as usize].map(|i| i as usize);
+                keep_edges_apart(
+                    [a, b, c, d],
                     collisions.thickness,
                     inverse_masses,
                     start,
@@ -110,12 +140,20 @@ impl Contacts {
 
     /// Lists the particle–triangle pairs within `thickness + skin` (m) now and at least `thickness`
     /// apart at rest, in triangle order.
-    fn list_pairs(&mut self, thickness: f64, skin: f64, rest: &[DVec3], triangles: &[[u32; 3]]) {
+    fn list_pairs(
+        &mut self,
+        thickness: f64,
+        skin: f64,
+        rest: &[DVec3],
+        triangles: &[[u32; 3]],
+        parallel: bool,
+    ) {
         let reach = thickness + skin;
         self.hash.build(&self.now, CELL_PER_REACH * reach);
-        self.point_triangle.clear();
-        for (t, triangle) in triangles.iter().enumerate() {
-            let corners = triangle.map(|i| self.now[i as usize]);
+        let (hash, now) = (&self.hash, &self.now[..]);
+        self.point_triangle = concat_in_order(parallel, triangles.len(), |t, pairs| {
+            let triangle = &triangles[t];
+            let corners = triangle.map(|i| now[i as usize]);
             let low = corners[0].min(corners[1]).min(corners[2]) - DVec3::splat(reach);
             let high = corners[0].max(corners[1]).max(corners[2]) + DVec3::splat(reach);
             // A ball around the centroid holding the triangle and its reach: a cheap first test.
@@ -126,8 +164,8 @@ impl Contacts {
                 .fold(0.0, f64::max)
                 .sqrt()
                 + reach;
-            self.hash.for_each_in_box(low, high, |p| {
-                let x = self.now[p as usize];
+            hash.for_each_in_box(low, high, |p| {
+                let x = now[p as usize];
                 if triangle.contains(&p) || x.distance_squared(centroid) > ball * ball {
                     return;
                 }
@@ -139,12 +177,39 @@ impl Contacts {
                 let rest_distance =
                     (at_rest - closest_point_on_triangle(at_rest, rest_corners).0).length();
                 if rest_distance >= thickness {
-                    self.point_triangle.push((p, t as u32));
+                    pairs.push((p, t as u32));
                 }
             });
-        }
+        });
+        self.list_edge_pairs(thickness, reach, rest, triangles, parallel);
         self.listed_at.clone_from(&self.now);
         self.listed_thickness = thickness;
+    }
+}
+
+/// What `list(i, pairs)` pushes for every `i` in `0..count`, concatenated in the order of `i`: on
+/// rayon's threads when `parallel`, else on this one, the same list either way.
+fn concat_in_order(
+    parallel: bool,
+    count: usize,
+    list: impl Fn(usize, &mut Vec<(u32, u32)>) + Sync,
+) -> Vec<(u32, u32)> {
+    if parallel {
+        (0..count)
+            .into_par_iter()
+            .with_min_len(1024)
+            .fold_with(Vec::new(), |mut pairs, i| {
+                list(i, &mut pairs);
+                pairs
+            })
+            .collect::<Vec<Vec<(u32, u32)>>>()
+            .concat()
+    } else {
+        let mut pairs = Vec::new();
+        for i in 0..count {
+            list(i, &mut pairs);
+        }
+        pairs
     }
 }
 
@@ -164,6 +229,166 @@ impl Collider {
             Collider::Plane { .. } => (DVec3::NEG_INFINITY, DVec3::INFINITY),
         }
     }
+}
+
+impl Contacts {
+    /// Lists the pairs of edges within `reach` (m) now, sharing no particle and at least `thickness`
+    /// apart at rest. Edges are hashed by midpoint in cells of `reach` plus the longest edge: two
+    /// edges within `reach` have midpoints at most that far apart, one cell.
+    fn list_edge_pairs(
+        &mut self,
+        thickness: f64,
+        reach: f64,
+        rest: &[DVec3],
+        triangles: &[[u32; 3]],
+        parallel: bool,
+    ) {
+        if self.edges.is_empty() {
+            self.edges = triangles
+                .iter()
+                .flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]])
+                .map(|[a, b]| [a.min(b), a.max(b)])
+                .collect();
+            self.edges.sort_unstable();
+            self.edges.dedup();
+        }
+        let Contacts {
+            edges,
+            edge_edge,
+            edge_hash,
+            midpoints,
+            half_lengths,
+            now,
+            ..
+        } = self;
+        half_lengths.clear();
+        half_lengths.extend(
+            edges
+                .iter()
+                .map(|&[a, b]| now[a as usize].distance(now[b as usize]) / 2.0),
+        );
+        midpoints.clear();
+        midpoints.extend(
+            edges
+                .iter()
+                .map(|&[a, b]| (now[a as usize] + now[b as usize]) / 2.0),
+        );
+        let longest = 2.0 * half_lengths.iter().copied().fold(0.0, f64::max);
+        let cell = reach + longest;
+        edge_hash.build(midpoints, cell);
+        let (edges, edge_hash, midpoints, now) =
+            (&edges[..], &*edge_hash, &midpoints[..], &now[..]);
+        *edge_edge = concat_in_order(parallel, edges.len(), |e, pairs| {
+            let [a, b] = edges[e];
+            let middle = midpoints[e];
+            // Each pair once: the later edges of this edge's cell, all edges of the 13 cells after it.
+            edge_hash.for_each_in_own_and_forward_cells(e as u32, |f| {
+                let [c, d] = edges[f as usize];
+                if c == a || c == b || d == a || d == b {
+                    return;
+                }
+                let within = reach + half_lengths[e] + half_lengths[f as usize];
+                if middle.distance_squared(midpoints[f as usize]) > within * within {
+                    return;
+                }
+                let [x, y, z, w] = [a, b, c, d].map(|i| now[i as usize]);
+                // Boxes farther apart than the reach along some axis: a cheap first test.
+                let apart = (x.min(y) - z.max(w)).max(z.min(w) - x.max(y));
+                if apart.max_element() >= reach || closest_points_of_segments(x, y, z, w).2 >= reach
+                {
+                    return;
+                }
+                let [x, y, z, w] = [a, b, c, d].map(|i| rest[i as usize]);
+                if closest_points_of_segments(x, y, z, w).2 >= thickness {
+                    pairs.push(((e as u32).min(f), (e as u32).max(f)));
+                }
+            });
+        });
+        // Listed in the order the cells were visited: sorted, the order depends on the pairs alone.
+        edge_edge.sort_unstable();
+    }
+}
+
+/// Keeps edges `a`–`b` and `c`–`d` at least `thickness` (m) apart on the side they started the
+/// sub-step on: `C = n·(x_ab(s) − x_cd(t)) − thickness ≥ 0` at the closest points `s`, `t` of the
+/// segments now, `n` the unit direction between those points at the start (Bridson et al. 2002, §6:
+/// edge–edge proximity), projected with the inverse masses (Müller et al. 2007, stiffness 1).
+fn keep_edges_apart(
+    [a, b, c, d]: [usize; 4],
+    thickness: f64,
+    inverse_masses: &[f64],
+    start: &[DVec3],
+    now: &mut [DVec3],
+) {
+    let (s, t, distance) = closest_points_of_segments(now[a], now[b], now[c], now[d]);
+    let gap = now[a].lerp(now[b], s) - now[c].lerp(now[d], t);
+    let start_gap = start[a].lerp(start[b], s) - start[c].lerp(start[d], t);
+    let Some(direction) = start_gap.try_normalize().or_else(|| gap.try_normalize()) else {
+        return; // touching at the start and now: no direction to part them in
+    };
+    let crossed = direction.dot(gap) < 0.0 && s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0;
+    if !(distance < thickness || crossed) {
+        return;
+    }
+    let constraint = direction.dot(gap) - thickness;
+    if constraint >= 0.0 {
+        return;
+    }
+    let weights = [1.0 - s, s, -(1.0 - t), -t];
+    let particles = [a, b, c, d];
+    let divisor: f64 = particles
+        .iter()
+        .zip(weights)
+        .map(|(&i, g)| inverse_masses[i] * g * g)
+        .sum();
+    if divisor <= 0.0 {
+        return;
+    }
+    let push = -constraint / divisor * direction;
+    for (&i, g) in particles.iter().zip(weights) {
+        now[i] += inverse_masses[i] * g * push;
+    }
+}
+
+/// The closest points of segments `p1`–`q1` and `p2`–`q2` as parameters `s`, `t` in [0, 1] along
+/// each, and their distance (m) (Ericson 2005, *Real-Time Collision Detection*, §5.1.9).
+pub(crate) fn closest_points_of_segments(
+    p1: DVec3,
+    q1: DVec3,
+    p2: DVec3,
+    q2: DVec3,
+) -> (f64, f64, f64) {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    let (s, t) = if a <= f64::EPSILON && e <= f64::EPSILON {
+        (0.0, 0.0)
+    } else if a <= f64::EPSILON {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= f64::EPSILON {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denominator = a * e - b * b;
+            let mut s = if denominator > 0.0 {
+                ((b * f - c * e) / denominator).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    let distance = (p1 + s * d1).distance(p2 + t * d2);
+    (s, t, distance)
 }
 
 /// Keeps particle `p` at least `thickness` (m) from triangle `(a, b, c)` on the side it started the
@@ -349,6 +574,32 @@ impl SpatialHash {
         }
     }
 
+    /// Calls `visit` for every entry after `entry` in `entry`'s own cell and for every entry in the 13
+    /// neighbouring cells that come after that cell (in lexicographic order of the offset): over all
+    /// entries, every pair in the same or neighbouring cells is visited once.
+    fn for_each_in_own_and_forward_cells(&self, entry: u32, mut visit: impl FnMut(u32)) {
+        let buckets = self.starts.len() - 1;
+        let own = self.cells[entry as usize];
+        for di in -1..=1i64 {
+            for dj in -1..=1i64 {
+                for dk in -1..=1i64 {
+                    if (di, dj, dk) < (0, 0, 0) {
+                        continue;
+                    }
+                    let cell = [own[0] + di, own[1] + dj, own[2] + dk];
+                    let b = bucket(cell, buckets);
+                    for &q in &self.particles[self.starts[b] as usize..self.starts[b + 1] as usize]
+                    {
+                        let same = (di, dj, dk) == (0, 0, 0);
+                        if self.cells[q as usize] == cell && (!same || q > entry) {
+                            visit(q);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Calls `visit` once for every particle whose cell overlaps the box `low..high` (m).
     fn for_each_in_box(&self, low: DVec3, high: DVec3, mut visit: impl FnMut(u32)) {
         let buckets = self.starts.len() - 1;
@@ -444,6 +695,73 @@ mod tests {
         assert!((moved.z - (-0.012)).abs() < 1e-15, "{moved}");
         let height = now[0].z - (now[1].z + now[2].z + now[3].z) / 3.0;
         assert!(height > 0.0);
+    }
+
+    #[test]
+    fn the_closest_points_of_two_segments_agree_with_a_fine_search() {
+        let cases = [
+            [
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(0.5, 1.0, -1.0),
+                DVec3::new(0.5, 1.0, 1.0),
+            ],
+            [
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(2.0, 1.0, 0.0),
+                DVec3::new(3.0, 2.0, 0.5),
+            ],
+            [
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(0.2, 0.1, 0.0),
+                DVec3::new(0.8, 0.1, 0.0),
+            ],
+            [
+                DVec3::ZERO,
+                DVec3::Y,
+                DVec3::new(-0.5, 0.3, 0.2),
+                DVec3::new(0.5, 0.9, -0.1),
+            ],
+        ];
+        for [p1, q1, p2, q2] in cases {
+            let (_, _, found) = closest_points_of_segments(p1, q1, p2, q2);
+            let n = 1000;
+            let mut best = f64::INFINITY;
+            for i in 0..=n {
+                let x = p1.lerp(q1, i as f64 / n as f64);
+                for j in 0..=n {
+                    best = best.min(x.distance(p2.lerp(q2, j as f64 / n as f64)));
+                }
+            }
+            // The lattice points lie within half a step of the true closest points on each segment.
+            let step = (q1 - p1).length().max((q2 - p2).length()) / n as f64;
+            assert!(
+                found <= best + 1e-12 && best - found <= step,
+                "{found} {best}"
+            );
+        }
+    }
+
+    #[test]
+    fn edges_that_passed_through_each_other_go_back() {
+        // Edge 0–1 along x at z = 0.01, edge 2–3 along y at z = 0; during the sub-step the first moved
+        // to z = −0.002, through the second.
+        let start = vec![
+            DVec3::new(-1.0, 0.0, 0.01),
+            DVec3::new(1.0, 0.0, 0.01),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ];
+        let mut now = start.clone();
+        now[0].z = -0.002;
+        now[1].z = -0.002;
+        keep_edges_apart([0, 1, 2, 3], 0.004, &[1.0, 1.0, 0.0, 0.0], &start, &mut now);
+        assert!(
+            (now[0].z - 0.004).abs() < 1e-15 && (now[1].z - 0.004).abs() < 1e-15,
+            "{now:?}"
+        );
     }
 
     #[test]

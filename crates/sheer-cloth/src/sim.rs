@@ -645,11 +645,14 @@ impl Simulation {
         contacts.now.resize(n, DVec3::ZERO);
         previous_positions.join_into(&mut contacts.start);
         split_positions.join_into(&mut contacts.now);
+        // Large cloths list their contact pairs on rayon's threads (the same list).
+        let parallel = n >= params.parallel_min_particles;
         contacts.project(
             &params.collisions,
             rest_positions,
             inverse_masses,
             triangles,
+            parallel,
         );
         for (i, &after) in contacts.now.iter().enumerate() {
             let before = DVec3::new(
