@@ -175,16 +175,13 @@ pub fn flag_simulation(
         params.remove_spring_damping();
     }
     if overrides.contacts != ContactCase::None {
-        let scene = crate::scene::Scene::default();
-        let (start, end) = scene.pole_axis();
         params
             .collisions
             .colliders
-            .push(sheer_cloth::Collider::Capsule {
-                start,
-                end,
-                radius: crate::scene::POLE_RADIUS,
-            });
+            .push(sheer_cloth::Collider::flag_pole(
+                &spec,
+                params.collisions.thickness,
+            ));
         params.collisions.self_collision = overrides.contacts == ContactCase::SelfAndPole;
     }
     Ok(Simulation::new(model, params)?)

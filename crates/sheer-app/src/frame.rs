@@ -626,15 +626,19 @@ pub fn camera(scene: &Scene) -> Camera {
 /// The pole's diffuse albedo: a pale wood.
 const POLE_ALBEDO: [f32; 3] = [0.45, 0.4, 0.325];
 
-/// The flag pole along the hoist edge (`Scene::pole_axis`): an opaque, diffuse cylinder lit by the
-/// point light and the sky like everything else.
+/// The flag pole along the hoist edge (`Scene::pole`): an opaque, diffuse cylinder lit by the point
+/// light and the sky like everything else, drawn out to where contacts keep the cloth's mid-surface
+/// (half its thickness beyond the capsule), so that it touches the hoist.
 fn pole(scene: &Scene) -> Result<OpaqueMesh, CliError> {
-    let (bottom, top) = scene.pole_axis();
+    let sheer_cloth::Collider::Capsule { start, end, radius } = scene.pole() else {
+        return Err(CliError::new("flag pole: not a capsule"));
+    };
+    let drawn_radius = radius + scene.simulation.collisions.thickness / 2.0;
     let to_f32 = |v: sheer_cloth::glam::DVec3| Vec3::new(v.x as f32, v.y as f32, v.z as f32);
     OpaqueMesh::cylinder(
-        to_f32(bottom),
-        to_f32(top),
-        crate::scene::POLE_RADIUS as f32,
+        to_f32(start),
+        to_f32(end),
+        drawn_radius as f32,
         24,
         POLE_ALBEDO,
     )

@@ -311,13 +311,12 @@ pub struct PoleSection {
 }
 
 impl Default for PoleSection {
+    /// Off: in the default wind the flag never reaches its pole (60 s checked), so the contact would
+    /// cost 1.4× the frame for nothing (docs/perf/collisions.md).
     fn default() -> Self {
-        PoleSection { collider: true }
+        PoleSection { collider: false }
     }
 }
-
-/// Radius of the flag pole, m.
-pub const POLE_RADIUS: f64 = 0.015;
 
 /// A whole scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -367,14 +366,10 @@ pub const BUILTIN_ASSETS: [(&str, &[u8]); 2] = [
 ];
 
 impl Scene {
-    /// The pole's axis, bottom to top (m), from 6 cm above the flag's top to 1.5 m below its foot:
-    /// behind the hoist by the radius and half the cloth's thickness, the distance contacts keep, so
-    /// that the flag at rest touches it nowhere however fine its grid.
-    pub fn pole_axis(&self) -> (sheer_cloth::glam::DVec3, sheer_cloth::glam::DVec3) {
-        let behind = POLE_RADIUS + self.simulation.collisions.thickness / 2.0;
-        let axis_top = self.flag.origin + sheer_cloth::glam::DVec3::new(-behind, 0.06, 0.0);
-        let bottom = axis_top - sheer_cloth::glam::DVec3::new(0.0, self.flag.height + 1.56, 0.0);
-        (bottom, axis_top)
+    /// The flag pole (`sheer_cloth::Collider::flag_pole`): drawn always, a collider where
+    /// `pole.collider` asks for it.
+    pub fn pole(&self) -> sheer_cloth::Collider {
+        sheer_cloth::Collider::flag_pole(&self.flag, self.simulation.collisions.thickness)
     }
 
     /// The simulation's parameters with the pole's capsule among the colliders where `pole.collider`
@@ -382,15 +377,7 @@ impl Scene {
     pub fn simulation_params(&self) -> SimParams {
         let mut params = self.simulation.clone();
         if self.pole.collider && params.method.is_position_based() {
-            let (start, end) = self.pole_axis();
-            params
-                .collisions
-                .colliders
-                .push(sheer_cloth::Collider::Capsule {
-                    start,
-                    end,
-                    radius: POLE_RADIUS,
-                });
+            params.collisions.colliders.push(self.pole());
         }
         params
     }
@@ -1314,7 +1301,7 @@ mod key_tests {
             "simulation.collisions.colliders",
             "[{ kind = \"sphere\", center = [0.5, 0.0, 0.5], radius = 0.25 }]",
         ),
-        ("pole.collider", "false"),
+        ("pole.collider", "true"),
         ("shading.model", "\"split\""),
         ("shading.path", "\"vertex\""),
         ("shading.optical_thickness", "[1.5, 2.5, 3.0]"),

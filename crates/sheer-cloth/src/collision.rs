@@ -43,7 +43,7 @@ const CELL_PER_REACH: f64 = 4.0;
 /// The candidate contact pairs of a cloth and the scratch the projection works in.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Contacts {
-    /// Where the particles were when `point_triangle` was listed (empty: not listed yet).
+    /// Where the particles were when the pairs were listed (empty: not listed yet).
     listed_at: Vec<DVec3>,
     /// The thickness (m) the list was made for.
     listed_thickness: f64,

@@ -61,8 +61,8 @@ pub use intersections::intersecting_triangle_pairs;
 pub use model::{ClothModel, GridShape, GridSpec, Spring, SpringKind};
 pub use parallel::thread_handoff_latency;
 pub use params::{
-    Collider, Collisions, DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, DivergenceLimits, Method, SimParams,
-    SpringParams, Wind,
+    Collider, Collisions, DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, DivergenceLimits, FLAG_POLE_RADIUS,
+    Method, SimParams, SpringParams, Wind,
 };
 pub use sim::{SetupError, Simulation, StepInfo, StrainStatistics};
 

@@ -457,7 +457,7 @@ pub struct Wind {
     /// sub-steps, so that the same value holds the forces equally long whatever the method's sub-step.
     /// On the default flag, holding them for up to 1, 2 or 4 ms changed nothing the study resolves
     /// across eight seeds of the gusts (`sheer study seeds`), and renewing them at every sub-step costs
-    /// 1.128× the frame of the 2 ms hold (`sheer study ablation`; docs/study.md).
+    /// 1.150× the frame of the 2 ms hold (`sheer study ablation`; docs/study.md).
     pub renewal_interval: f64,
 }
 
@@ -691,7 +691,23 @@ pub enum Collider {
     },
 }
 
+/// Radius of the flag pole of [`Collider::flag_pole`], m.
+pub const FLAG_POLE_RADIUS: f64 = 0.015;
+
 impl Collider {
+    /// The pole of a flag hung as [`GridSpec`](crate::GridSpec) says (hoist pinned at `x =
+    /// origin.x`): a vertical capsule of radius [`FLAG_POLE_RADIUS`] from 1.5 m below the flag's foot
+    /// to 6 cm above its top, its axis behind the hoist by the radius and half of `thickness` (m), the
+    /// distance contacts keep, so that the flag at rest touches it nowhere however fine its grid.
+    pub fn flag_pole(flag: &crate::GridSpec, thickness: f64) -> Collider {
+        let axis_top = flag.origin + DVec3::new(-(FLAG_POLE_RADIUS + thickness / 2.0), 0.06, 0.0);
+        Collider::Capsule {
+            start: axis_top - DVec3::new(0.0, flag.height + 1.56, 0.0),
+            end: axis_top,
+            radius: FLAG_POLE_RADIUS,
+        }
+    }
+
     /// Checks this collider's fields; the error names the key within the collider's table, e.g.
     /// `"collisions.colliders.radius"`.
     pub fn validate(&self) -> Result<(), ParamError> {

@@ -11,14 +11,9 @@ use sheer_cloth::{
 
 const FRAME: f64 = 1.0 / 60.0;
 
-/// The app's flag pole: a capsule 15 mm in radius, its axis 17 mm behind the hoist (the contact
-/// distance of the default 4 mm thickness).
+/// The flag's pole, as the app hangs it.
 fn pole() -> Collider {
-    Collider::Capsule {
-        start: DVec3::new(-0.017, -1.5, 0.0),
-        end: DVec3::new(-0.017, 0.86, 0.0),
-        radius: 0.015,
-    }
+    Collider::flag_pole(&GridSpec::default(), Collisions::default().thickness)
 }
 
 /// The default waving flag with self-collision and the pole.

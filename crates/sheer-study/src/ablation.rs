@@ -17,7 +17,9 @@
 //! each, the rounds' ratios spread by ±15 %.
 
 use sheer_cloth::glam::DVec3;
-use sheer_cloth::{GridSpec, Method, SimParams, SpringParams};
+use sheer_cloth::{
+    Collider, GridSpec, Method, SimParams, SpringParams, intersecting_triangle_pairs,
+};
 
 use crate::coverage::coverage_difference;
 use crate::cpu::thread_cpu_seconds;
@@ -59,6 +61,38 @@ pub struct AblationRow {
     pub coverage_vs_reference: Option<f64>,
     /// Whether the variant's run diverged before `time` (its error columns are then `None`).
     pub diverged: bool,
+    /// In how many of the first [`INTERSECTION_FRAMES`] frames the cloth passes through itself (some
+    /// pair of triangles intersects: `sheer_cloth::intersecting_triangle_pairs`); the same on each of
+    /// the variant's rows; `None` when the run diverged first.
+    pub self_intersecting_frames: Option<usize>,
+}
+
+/// Frames over which [`AblationRow::self_intersecting_frames`] counts (10 s at 60 Hz: the coverage
+/// window's 2.5 s is too short for the default flag to fold through itself).
+pub const INTERSECTION_FRAMES: usize = 600;
+
+/// In how many of the first [`INTERSECTION_FRAMES`] frames of `scene` run by `method` the cloth passes
+/// through itself (`None` if the run diverges).
+fn self_intersecting_frames(
+    scene: &Scene,
+    method: Method,
+    monitor: &Monitor,
+) -> Result<Option<usize>, StudyError> {
+    on_one_thread(|| {
+        let mut sim = scene.simulation(method)?;
+        let triangles = sim.triangles().to_vec();
+        let mut frames = 0;
+        for frame in 0..INTERSECTION_FRAMES {
+            if sim.step(scene.frame).is_err() {
+                return Ok(None);
+            }
+            frames += usize::from(intersecting_triangle_pairs(sim.positions(), &triangles) > 0);
+            if frame % 60 == 0 {
+                monitor.check()?;
+            }
+        }
+        Ok(Some(frames))
+    })?
 }
 
 /// Position of grid `spec` at parameters `(u, v)` ∈ [0, 1]² by bilinear interpolation of `positions`.
@@ -206,7 +240,7 @@ fn with_params(scene: &Scene, change: impl FnOnce(&mut SimParams)) -> Scene {
 }
 
 /// How long the wind's forces are held between renewals (`wind.renewal_interval`): renewed at every
-/// sub-step the default flag costs 1.128× its frame with the 2 ms hold (docs/ablation.md); held longer it
+/// sub-step the default flag costs 1.150× its frame with the 2 ms hold (docs/ablation.md); held longer it
 /// costs less. Every interval of 0 (every sub-step), 1, 2 and 4 ms but the scene's own, and once per
 /// frame.
 fn wind_interval_variants(scene: &Scene, method: Method) -> Vec<Variant> {
@@ -340,6 +374,21 @@ pub fn ablation(
             method,
         },
         Variant {
+            part: "pole collider",
+            setting: "on (capsule, 15 mm)".into(),
+            scene: with_params(scene, |p| {
+                p.collisions.colliders =
+                    vec![Collider::flag_pole(&scene.grid, p.collisions.thickness)];
+            }),
+            method,
+        },
+        Variant {
+            part: "self-collision",
+            setting: format!("on ({} mm)", scene.params.collisions.thickness * 1e3),
+            scene: with_params(scene, |p| p.collisions.self_collision = true),
+            method,
+        },
+        Variant {
             part: "integrator",
             setting: "implicit Euler ×1, CG 10⁻⁴".into(),
             scene: scene.clone(),
@@ -400,6 +449,7 @@ pub fn ablation(
         let coverage_vs_full = coverage_against(full_run.coverage.as_ref());
         let coverage_vs_reference = coverage_against(reference.trajectory.coverage.as_ref());
         let triangles = triangles_of(&variant.scene)?;
+        let self_intersecting = self_intersecting_frames(&variant.scene, variant.method, monitor)?;
         for &time in &times {
             let own = trajectory.at(time);
             let expected_full = full_run.at(time);
@@ -430,6 +480,7 @@ pub fn ablation(
                 coverage_vs_full,
                 coverage_vs_reference,
                 diverged: own.is_none(),
+                self_intersecting_frames: self_intersecting,
             });
         }
         monitor.finish_run(&format!("ablation {} {}", variant.part, variant.setting));

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Subcommand, ValueEnum};
 use sheer_cloth::Method;
 
-use crate::ablation::{AblationRow, FRAMES_PER_TURN, ablation};
+use crate::ablation::{AblationRow, FRAMES_PER_TURN, INTERSECTION_FRAMES, ablation};
 use crate::chart::{stability_chart, work_precision_chart};
 use crate::choose::{
     Budget, BudgetRecord, Choice, ChoiceFile, ChoiceRecord, DEFAULT_COVERAGE_BUDGET,
@@ -819,12 +819,12 @@ fn choice_file(
 /// The ablation CSV.
 pub fn ablation_csv(rows: &[AblationRow]) -> String {
     let mut csv = String::from(
-        "part,setting,method,substeps,iterations,columns,rows,time_s,cpu_ms_per_simulated_s,cost_vs_full,cost_vs_full_low,cost_vs_full_high,rms_vs_full_m,rms_vs_reference_m,silhouette_1_minus_iou,coverage_vs_full,coverage_vs_reference,diverged\n",
+        "part,setting,method,substeps,iterations,columns,rows,time_s,cpu_ms_per_simulated_s,cost_vs_full,cost_vs_full_low,cost_vs_full_high,rms_vs_full_m,rms_vs_reference_m,silhouette_1_minus_iou,coverage_vs_full,coverage_vs_reference,diverged,self_intersecting_frames\n",
     );
     for r in rows {
         let _ = writeln!(
             csv,
-            "{},\"{}\",{},{},{},{},{},{:?},{:?},{},{},{},{},{},{},{},{},{}",
+            "{},\"{}\",{},{},{},{},{},{:?},{:?},{},{},{},{},{},{},{},{},{},{}",
             r.part,
             r.setting,
             r.method.name(),
@@ -842,7 +842,9 @@ pub fn ablation_csv(rows: &[AblationRow]) -> String {
             optional(r.silhouette_difference),
             optional(r.coverage_vs_full),
             optional(r.coverage_vs_reference),
-            r.diverged
+            r.diverged,
+            r.self_intersecting_frames
+                .map_or(String::new(), |f| f.to_string())
         );
     }
     csv
@@ -883,9 +885,11 @@ pub fn write_ablation(
          Cost: CPU time on one thread, timed apart from the accuracy runs over the first {} s of a run, \
          {}, each variant beside the full model, the two runs taking turns every {} frames; \
          `CPU ms / simulated s` is the median of the variant's timed runs, `× full` the median of its \
-         rounds' ratios to the full model's time (least–greatest in brackets).\n\n\
+         rounds' ratios to the full model's time (least–greatest in brackets). \
+         Through itself: in how many of the first {} frames ({} s) some pair of the cloth's triangles \
+         intersects.\n\n\
          Parameters of the full model: {}.\n\n\
-         | part | setting | method | t (s) | CPU ms / simulated s | × full | vs full (mm) | vs reference (mm) | silhouette 1 − IoU | coverage vs full | coverage vs reference |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+         | part | setting | method | t (s) | CPU ms / simulated s | × full | vs full (mm) | vs reference (mm) | silhouette 1 − IoU | coverage vs full | coverage vs reference | through itself |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         scene.grid.columns,
         scene.grid.rows,
         describe(&method),
@@ -906,6 +910,8 @@ pub fn write_ablation(
             rounds => format!("in {rounds} rounds"),
         },
         FRAMES_PER_TURN,
+        INTERSECTION_FRAMES,
+        INTERSECTION_FRAMES as f64 * scene.frame,
         parameter_line(scene)
     );
     let mm_or_diverged =
@@ -913,7 +919,7 @@ pub fn write_ablation(
     for r in &rows {
         let _ = writeln!(
             text,
-            "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} | {} |",
             r.part,
             r.setting,
             describe(&r.method),
@@ -927,7 +933,9 @@ pub fn write_ablation(
             mm_or_diverged(r.rms_vs_reference),
             fraction(r.silhouette_difference),
             fraction(r.coverage_vs_full),
-            fraction(r.coverage_vs_reference)
+            fraction(r.coverage_vs_reference),
+            r.self_intersecting_frames
+                .map_or("diverged".to_string(), |f| f.to_string())
         );
     }
     write_file(&out.join("ablation.md"), &text)
