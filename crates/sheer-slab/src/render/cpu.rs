@@ -73,7 +73,7 @@ pub fn slab_values_at(
 }
 
 /// [`slab_values_at`] with the point light's beam reaching the point through `light` (the layers in
-/// front of it, [`super::shadow`]): the beam's part times `light.direct`, plus with the all-orders model
+/// front of it, `shadow.rs`): the beam's part times `light.direct`, plus with the all-orders model
 /// the slab's diffuse response to the isotropic radiance `μ0·E⊥·light.diffuse` on its lit face.
 pub fn slab_values_lit_by(
     position: DVec3,

@@ -429,7 +429,7 @@ impl HeadlessRenderer {
     /// Evaluates the shader's model function (`slab_shapes` in `shaders/thin_slab.wgsl`) on the GPU for
     /// samples `(τ1, μ0, μ)` and returns `(eq. 4, eq. 5, α)` per sample, the radiances per unit
     /// irradiance and without the factor Λ/(4π): for checking the WGSL model against [`crate::model`].
-    /// The renderer only calls it with cosines ≥ [`COSINE_FLOOR`].
+    /// The renderer only calls it with cosines ≥ [`COSINE_FLOOR`](crate::render::cpu::COSINE_FLOOR).
     pub fn evaluate_shader_model(
         &mut self,
         samples: &[[f32; 3]],

@@ -505,7 +505,7 @@ pub struct ShadingParams {
     pub all_orders_sampling: AllOrdersSampling,
     /// Daylight on both faces ([`crate::sky`]), or none (the paper's scene: the point light alone).
     pub sky: Option<SkyLight>,
-    /// Translucent shadows of the point light ([`super::shadow`]), or none (the paper: every point gets
+    /// Translucent shadows of the point light (`shadow.rs`), or none (the paper: every point gets
     /// the whole beam).
     pub shadows: Option<Shadows>,
 }
