@@ -578,7 +578,6 @@ impl SpatialHash {
     /// neighbouring cells that come after that cell (in lexicographic order of the offset): over all
     /// entries, every pair in the same or neighbouring cells is visited once.
     fn for_each_in_own_and_forward_cells(&self, entry: u32, mut visit: impl FnMut(u32)) {
-        let buckets = self.starts.len() - 1;
         let own = self.cells[entry as usize];
         for di in -1..=1i64 {
             for dj in -1..=1i64 {
@@ -586,15 +585,12 @@ impl SpatialHash {
                     if (di, dj, dk) < (0, 0, 0) {
                         continue;
                     }
-                    let cell = [own[0] + di, own[1] + dj, own[2] + dk];
-                    let b = bucket(cell, buckets);
-                    for &q in &self.particles[self.starts[b] as usize..self.starts[b + 1] as usize]
-                    {
-                        let same = (di, dj, dk) == (0, 0, 0);
-                        if self.cells[q as usize] == cell && (!same || q > entry) {
+                    let same = (di, dj, dk) == (0, 0, 0);
+                    self.for_each_in_cell([own[0] + di, own[1] + dj, own[2] + dk], |q| {
+                        if !same || q > entry {
                             visit(q);
                         }
-                    }
+                    });
                 }
             }
         }
@@ -602,20 +598,23 @@ impl SpatialHash {
 
     /// Calls `visit` once for every particle whose cell overlaps the box `low..high` (m).
     fn for_each_in_box(&self, low: DVec3, high: DVec3, mut visit: impl FnMut(u32)) {
-        let buckets = self.starts.len() - 1;
         let (from, to) = (cell_of(low, self.cell), cell_of(high, self.cell));
         for i in from[0]..=to[0] {
             for j in from[1]..=to[1] {
                 for k in from[2]..=to[2] {
-                    let b = bucket([i, j, k], buckets);
-                    for &p in &self.particles[self.starts[b] as usize..self.starts[b + 1] as usize]
-                    {
-                        // Another cell can share the bucket: visit each particle from its own cell only.
-                        if self.cells[p as usize] == [i, j, k] {
-                            visit(p);
-                        }
-                    }
+                    self.for_each_in_cell([i, j, k], &mut visit);
                 }
+            }
+        }
+    }
+
+    /// Calls `visit` for every particle in `cell`, in index order.
+    fn for_each_in_cell(&self, cell: [i64; 3], mut visit: impl FnMut(u32)) {
+        let b = bucket(cell, self.starts.len() - 1);
+        for &p in &self.particles[self.starts[b] as usize..self.starts[b + 1] as usize] {
+            // Another cell can share the bucket: visit each particle from its own cell only.
+            if self.cells[p as usize] == cell {
+                visit(p);
             }
         }
     }

@@ -629,6 +629,8 @@ impl Simulation {
     /// Projects the contacts of a position-based sub-step of `h` (s) on the split state, and adds what
     /// they moved a particle over `h` to its velocity: as if projected before the velocity update.
     pub(crate) fn project_contacts(&mut self, h: f64) {
+        // Large cloths list their contact pairs on rayon's threads (the same list).
+        let parallel = self.parallel();
         let Simulation {
             params,
             contacts,
@@ -645,8 +647,6 @@ impl Simulation {
         contacts.now.resize(n, DVec3::ZERO);
         previous_positions.join_into(&mut contacts.start);
         split_positions.join_into(&mut contacts.now);
-        // Large cloths list their contact pairs on rayon's threads (the same list).
-        let parallel = n >= params.parallel_min_particles;
         contacts.project(
             &params.collisions,
             rest_positions,
@@ -655,18 +655,10 @@ impl Simulation {
             parallel,
         );
         for (i, &after) in contacts.now.iter().enumerate() {
-            let before = DVec3::new(
-                split_positions.x[i],
-                split_positions.y[i],
-                split_positions.z[i],
-            );
+            let before = split_positions.as_ref().at(i);
             if after != before {
                 split_positions.set(i, after);
-                let v = DVec3::new(
-                    split_velocities.x[i],
-                    split_velocities.y[i],
-                    split_velocities.z[i],
-                );
+                let v = split_velocities.as_ref().at(i);
                 split_velocities.set(i, v + (after - before) / h);
             }
         }
