@@ -21,8 +21,10 @@ use clap::Args;
 use sheer_slab::render::LinearImage;
 
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
-use crate::scene::{AllOrdersLookup, EvaluationPathName, Scattering, ShadingModel};
+use crate::scene::ShadingModel;
 use crate::{CliError, outln};
+use sheer_slab::ScatteringOrders;
+use sheer_slab::render::{AllOrdersSampling, EvaluationPath};
 
 #[derive(Debug, Args)]
 pub struct BenchRenderArgs {
@@ -54,9 +56,9 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CliError> {
     let scene = crate::load_scene(args.scene.as_deref())?;
     let mut renderer = FrameRenderer::new(&scene)?;
     let mut flag = FlagScene::new(scene)?;
-    use AllOrdersLookup::{Fragment as TablePerFragment, Vertex as TablePerVertex};
-    use EvaluationPathName::{Cpu, Fragment, Vertex};
-    use Scattering::{AllOrders, Single};
+    use AllOrdersSampling::{PerFragment as TablePerFragment, PerVertex as TablePerVertex};
+    use EvaluationPath::{Cpu, PerFragment as Fragment, PerVertex as Vertex};
+    use ScatteringOrders::{All as AllOrders, Single};
     use ShadingModel::{Baseline, ThinSlab};
     // (name, model, path, scattering, where the fragment path looks the all-orders table up, sky light,
     // shadows).

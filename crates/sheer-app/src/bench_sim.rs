@@ -31,9 +31,7 @@ pub struct BenchSimArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub iterations: Option<u32>,
     /// rayon thread counts to measure (comma-separated), each at most the core count. Default: 1 and
-    /// all cores. With more than one thread, the time one thread takes to see what another has written
-    /// (`thread hand-off`, measured before and after the runs) goes to stderr: two-thread times grow
-    /// with it.
+    /// all cores.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub threads: Vec<usize>,
     /// Particle count from which passes run on rayon's pool (default: the library's measured threshold;
@@ -303,11 +301,6 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         spring_damping: args.spring_damping,
         contacts: args.contacts,
     };
-    // Two-thread figures depend on how far apart the host has put the cores: measured before and after
-    // the runs, and printed beside them (to stderr, so that the CSV stays CSV).
-    let handoff = || sheer_cloth::thread_handoff_latency(Duration::from_millis(100));
-    let several_threads = threads.iter().any(|&t| t > 1);
-    let handoff_before = several_threads.then(handoff);
     if args.csv {
         outln!(
             "method,width,height,substeps,iterations,threads,ms_per_frame,particle_substeps_per_s"
@@ -383,18 +376,6 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
                 several.join(",")
             );
         }
-    }
-    if let Some(before) = handoff_before {
-        // `—`: not measured (one CPU, or two threads that could not run at once).
-        let text = |latency: Option<Duration>| {
-            latency.map_or("—".to_string(), |d| format!("{} ns", d.as_nanos()))
-        };
-        eprintln!(
-            "thread hand-off: {} before the runs, {} after (two-thread times grow with it: \
-             crates/sheer-cloth/README.md, \"Against the target\")",
-            text(before),
-            text(handoff())
-        );
     }
     Ok(())
 }

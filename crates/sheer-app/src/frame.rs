@@ -15,12 +15,10 @@ use sheer_slab::render::{
     Background, Camera, EvaluationPath, HeadlessRenderer, LightMarker, LinearImage, OpaqueMesh,
     ShadingParams, Shadows, SlabFrame, SlabMesh, Texture2d, srgb8_to_linear,
 };
-use sheer_slab::{
-    AllOrdersTable, DiffuseEnvironment, DiffuseTable, IrradianceConvention, SkyLight,
-};
+use sheer_slab::{AllOrdersTable, DiffuseEnvironment, DiffuseTable, SkyLight};
 
 use crate::CliError;
-use crate::scene::{self, AllOrdersLookup, Convention, EvaluationPathName, Scene, ShadingModel};
+use crate::scene::{self, Scene, ShadingModel};
 use crate::simulate::{flag_simulation, grid_uvs};
 
 /// Time spent in each stage of the last frame.
@@ -342,22 +340,9 @@ pub fn shadows(scene: &Scene) -> Result<Option<Shadows>, CliError> {
     }))
 }
 
-/// Where the renderer's per-fragment path looks the all-orders table up (`shading.all_orders_lookup`).
-fn all_orders_sampling(scene: &Scene) -> sheer_slab::render::AllOrdersSampling {
-    match scene.shading.all_orders_lookup {
-        AllOrdersLookup::Vertex => sheer_slab::render::AllOrdersSampling::PerVertex,
-        AllOrdersLookup::Fragment => sheer_slab::render::AllOrdersSampling::PerFragment,
-    }
-}
-
-/// The renderer's scattering model for the scene's `shading.scattering`.
+/// The renderer's scattering model for the scene's `shading.scattering`, with the built-in table.
 fn scattering(scene: &Scene) -> Result<sheer_slab::Scattering, CliError> {
-    Ok(match scene.shading.scattering {
-        scene::Scattering::Single => sheer_slab::Scattering::Single,
-        scene::Scattering::AllOrders => {
-            sheer_slab::Scattering::AllOrders(builtin_all_orders_table()?)
-        }
-    })
+    sheer_slab::Scattering::with_orders(scene.shading.scattering, builtin_all_orders_table)
 }
 
 /// Validates the shading parameters; τ1 outside the all-orders table names the scene keys.
@@ -457,14 +442,11 @@ impl FrameShading {
             thickness_texture,
             light_position: Vec3::from_array(scene.light.position(0.0)),
             light_flux: scene.light.flux,
-            convention: match scene.shading.convention {
-                Convention::NormalToBeam => IrradianceConvention::NormalToBeam,
-                Convention::PaperLiteral => IrradianceConvention::PaperLiteral,
-            },
+            convention: scene.shading.convention,
             exposure: scene.shading.exposure,
             baseline_transmittance: scene.shading.baseline_alpha,
             scattering: scattering(scene)?,
-            all_orders_sampling: all_orders_sampling(scene),
+            all_orders_sampling: scene.shading.all_orders_lookup,
             sky: sky_light(scene)?,
             shadows: shadows(scene)?,
         };
@@ -488,12 +470,9 @@ impl FrameShading {
         shading.light_flux = scene.light.flux;
         shading.exposure = scene.shading.exposure;
         shading.baseline_transmittance = scene.shading.baseline_alpha;
-        shading.convention = match scene.shading.convention {
-            Convention::NormalToBeam => IrradianceConvention::NormalToBeam,
-            Convention::PaperLiteral => IrradianceConvention::PaperLiteral,
-        };
+        shading.convention = scene.shading.convention;
         shading.scattering = scattering(scene)?;
-        shading.all_orders_sampling = all_orders_sampling(scene);
+        shading.all_orders_sampling = scene.shading.all_orders_lookup;
         if scene.environment != self.environment {
             shading.sky = sky_light(scene)?;
         }
@@ -528,11 +507,7 @@ impl FrameShading {
             radius_pixels: (width.min(height) as f32 / 100.0).max(3.0),
             radiance: MARKER_RADIANCE,
         });
-        let thin_slab = match scene.shading.path {
-            EvaluationPathName::Fragment => EvaluationPath::PerFragment,
-            EvaluationPathName::Vertex => EvaluationPath::PerVertex,
-            EvaluationPathName::Cpu => EvaluationPath::Cpu,
-        };
+        let thin_slab = scene.shading.path;
         let this = &*self;
         let frame = |path, scissor| SlabFrame {
             mesh: &flag.mesh,

@@ -4,7 +4,6 @@
 //! also on one line).
 
 mod assets;
-mod bench_memory;
 mod bench_render;
 mod bench_sim;
 mod frame;
@@ -15,6 +14,7 @@ mod scene;
 mod sequence;
 mod simulate;
 mod slab_cmd;
+mod study_cmd;
 mod window;
 mod window_image;
 
@@ -155,7 +155,7 @@ enum Command {
     Assets(AssetsArgs),
     /// Speed against accuracy of the simulator: work–precision, stability map, ablation and the
     /// automatic choice of the default flag's method (docs/study.md).
-    Study(sheer_study::StudyArgs),
+    Study(study_cmd::StudyArgs),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -174,9 +174,6 @@ enum BenchCommand {
     Sim(bench_sim::BenchSimArgs),
     /// Frames per second of the case study per evaluation path and baseline, with per-stage times.
     Render(bench_render::BenchRenderArgs),
-    /// Memory bandwidth on one core and on several, and a core reading what another just wrote: the
-    /// ceiling on what threads gain on a large cloth.
-    Memory(bench_memory::BenchMemoryArgs),
 }
 
 fn main() -> ExitCode {
@@ -216,11 +213,10 @@ fn main() -> ExitCode {
         Some(Command::Simulate(args)) => simulate::run(args),
         Some(Command::Orbit(args)) => orbit_cmd::run(args),
         Some(Command::Study(args)) => {
-            sheer_study::run(args).map_err(|e| CliError::new(e.to_string()))
+            study_cmd::run(args).map_err(|e| CliError::new(e.to_string()))
         }
         Some(Command::Bench(BenchCommand::Sim(args))) => bench_sim::run(args),
         Some(Command::Bench(BenchCommand::Render(args))) => bench_render::run(args),
-        Some(Command::Bench(BenchCommand::Memory(args))) => bench_memory::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

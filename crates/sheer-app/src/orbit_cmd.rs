@@ -16,8 +16,9 @@ use sheer_slab::render::LinearImage;
 
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
 use crate::render_cmd::draw_label;
-use crate::scene::{Scattering, Scene};
+use crate::scene::Scene;
 use crate::{CliError, outln};
+use sheer_slab::ScatteringOrders;
 
 #[derive(Debug, Args)]
 pub struct OrbitArgs {
@@ -86,7 +87,7 @@ pub fn near_black_shares(frames: &[LinearImage]) -> (Vec<f64>, f64) {
 /// The paper's shading of `scene`: single scattering and the point light alone.
 pub fn paper_model(scene: &Scene) -> Scene {
     let mut paper = scene.clone();
-    paper.shading.scattering = Scattering::Single;
+    paper.shading.scattering = ScatteringOrders::Single;
     paper.environment.sky_light = false;
     paper
 }
@@ -179,8 +180,8 @@ pub fn run(args: &OrbitArgs) -> Result<(), CliError> {
         let label = format!(
             "this scene: {}{}",
             match scene.shading.scattering {
-                Scattering::AllOrders => "all orders",
-                Scattering::Single => "single scattering",
+                ScatteringOrders::All => "all orders",
+                ScatteringOrders::Single => "single scattering",
             },
             if scene.environment.sky_light {
                 " + sky"

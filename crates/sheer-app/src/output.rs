@@ -14,6 +14,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, LazyLock};
 
 use crate::CliError;
 
@@ -180,7 +181,10 @@ pub fn prepare_sequence_folder(
 pub mod interrupt {
     use super::*;
 
-    static REQUESTED: AtomicBool = AtomicBool::new(false);
+    /// Set by the first Ctrl-C; shared as an `Arc` with libraries that poll a flag of their own
+    /// (`sheer_study::Monitor`).
+    static REQUESTED: LazyLock<Arc<AtomicBool>> =
+        LazyLock::new(|| Arc::new(AtomicBool::new(false)));
 
     /// Installs the handler (once per process; later calls do nothing). Until it is installed, Ctrl-C
     /// keeps its default behaviour, ending the process.
@@ -206,6 +210,11 @@ pub mod interrupt {
     /// Whether Ctrl-C was pressed since the handler was installed.
     pub fn requested() -> bool {
         REQUESTED.load(Ordering::SeqCst)
+    }
+
+    /// The flag the first Ctrl-C sets.
+    pub fn flag() -> Arc<AtomicBool> {
+        Arc::clone(&REQUESTED)
     }
 }
 

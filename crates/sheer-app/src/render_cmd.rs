@@ -11,8 +11,9 @@ use sheer_slab::render::{LinearImage, save_image_file};
 use crate::CliError;
 use crate::frame::{FlagScene, FrameRenderer, StageTimes};
 use crate::output::FrameNames;
-use crate::scene::{Scattering, Scene, ShadingModel};
+use crate::scene::{Scene, ShadingModel};
 use crate::sequence::{Sequence, advance_to, run_sequence};
+use sheer_slab::ScatteringOrders;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ImageFormat {
@@ -241,7 +242,7 @@ pub fn figure2_panels(scene: &Scene, time: f64) -> Result<[LinearImage; 4], CliE
             flag.scene.shading.model = model;
             if model == ShadingModel::ThinSlab {
                 // The paper's figure: its single-scattering model (eqs. (4)–(5)), Λ = 1, τ1 = 2.
-                flag.scene.shading.scattering = Scattering::Single;
+                flag.scene.shading.scattering = ScatteringOrders::Single;
                 flag.scene.shading.optical_thickness = [2.0; 3];
                 flag.scene.shading.albedo_scale = [1.0; 3];
             }
@@ -387,9 +388,9 @@ mod label_tests {
         let mut scene = Scene::builtin_default().unwrap();
         scene.render.width = 64;
         scene.render.height = 48;
-        scene.shading.scattering = Scattering::Single;
+        scene.shading.scattering = ScatteringOrders::Single;
         let single = figure2_panels(&scene, 0.1).unwrap();
-        scene.shading.scattering = Scattering::AllOrders;
+        scene.shading.scattering = ScatteringOrders::All;
         let all_orders = figure2_panels(&scene, 0.1).unwrap();
         assert_eq!(single, all_orders);
     }

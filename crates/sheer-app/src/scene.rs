@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use sheer_cloth::{GridSpec, SimParams};
+use sheer_slab::render::{AllOrdersSampling, EvaluationPath};
+use sheer_slab::{IrradianceConvention, ScatteringOrders};
 
 use crate::CliError;
 
@@ -25,55 +27,15 @@ pub enum ShadingModel {
     Split,
 }
 
-/// Where the thin-slab model is evaluated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EvaluationPathName {
-    Fragment,
-    Vertex,
-    Cpu,
-}
-
-/// Which orders of scattering the thin slab's diffuse radiance includes (`shading.scattering`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Scattering {
-    /// Single scattering, eqs. (4)–(5): the paper's model.
-    #[serde(rename = "single")]
-    Single,
-    /// All orders: eqs. (4)–(5) plus the multiply-scattered radiance from the precomputed table
-    /// (`assets/all_orders_table.bin`, built into the binary); τ1 must lie in its range [0.01, 10].
-    #[serde(rename = "all-orders")]
-    AllOrders,
-}
-
-/// Where the per-fragment path looks the all-orders table up (`shading.all_orders_lookup`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum AllOrdersLookup {
-    /// In every fragment: exact to the table, about 1.8× single scattering on a software rasteriser.
-    Fragment,
-    /// Once per vertex per frame, interpolated: about 1.1× single scattering; errs at texture edges
-    /// and along folds.
-    Vertex,
-}
-
-/// Which irradiance goes into eqs. (4)–(5) (see the sheer-slab README for the finding).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Convention {
-    NormalToBeam,
-    PaperLiteral,
-}
-
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ShadingSection {
     pub model: ShadingModel,
     /// Single scattering (the paper) or all orders (eqs. (4)–(5) + the table's multiple part).
-    pub scattering: Scattering,
+    pub scattering: ScatteringOrders,
     /// With all orders on the fragment path: the table per vertex (interpolated) or per fragment.
-    pub all_orders_lookup: AllOrdersLookup,
-    pub path: EvaluationPathName,
+    pub all_orders_lookup: AllOrdersSampling,
+    pub path: EvaluationPath,
     /// τ1, the slab's optical thickness (dimensionless, > 0), per channel.
     pub optical_thickness: [f32; 3],
     /// Multiplies the albedo texture to give Λ per channel (Λ must stay in [0, 1]).
@@ -82,7 +44,7 @@ pub struct ShadingSection {
     pub albedo_texture: Option<String>,
     /// Optional thickness texture (red channel multiplies τ1), relative to the scene file.
     pub thickness_texture: Option<String>,
-    pub convention: Convention,
+    pub convention: IrradianceConvention,
     /// The baseline's constant α (0.2 in the paper).
     pub baseline_alpha: f32,
     /// Display exposure: linear radiance × exposure before sRGB encoding.
@@ -100,14 +62,14 @@ impl Default for ShadingSection {
         ShadingSection {
             model: ShadingModel::ThinSlab,
             // Single scattering misses 49–87 % of the light at τ1 = 2 (docs/shading-model.md).
-            scattering: Scattering::AllOrders,
-            all_orders_lookup: AllOrdersLookup::Fragment,
-            path: EvaluationPathName::Fragment,
+            scattering: ScatteringOrders::All,
+            all_orders_lookup: AllOrdersSampling::PerFragment,
+            path: EvaluationPath::PerFragment,
             optical_thickness: [2.0; 3],
             albedo_scale: [1.0; 3],
             albedo_texture: Some("faroe_flag.png".into()),
             thickness_texture: None,
-            convention: Convention::NormalToBeam,
+            convention: IrradianceConvention::NormalToBeam,
             baseline_alpha: 0.2,
             exposure: 0.5,
             shadows: true,
@@ -1132,8 +1094,8 @@ mod tests {
             }
         );
         assert_eq!(scene.shading.model, ShadingModel::Split);
-        assert_eq!(scene.shading.path, EvaluationPathName::Cpu);
-        assert_eq!(scene.shading.convention, Convention::PaperLiteral);
+        assert_eq!(scene.shading.path, EvaluationPath::Cpu);
+        assert_eq!(scene.shading.convention, IrradianceConvention::PaperLiteral);
         assert_eq!(scene.light.position(5.0), scene.light.position(0.0));
         assert_eq!(scene.static_sheet.unwrap().segments, 8);
     }
@@ -1216,9 +1178,9 @@ mod tests {
 
     #[test]
     fn the_scattering_key_takes_single_or_all_orders_and_names_itself_when_wrong() {
-        assert_eq!(parse("").unwrap().shading.scattering, Scattering::AllOrders);
+        assert_eq!(parse("").unwrap().shading.scattering, ScatteringOrders::All);
         let single = parse("[shading]\nscattering = \"single\"").unwrap();
-        assert_eq!(single.shading.scattering, Scattering::Single);
+        assert_eq!(single.shading.scattering, ScatteringOrders::Single);
         for wrong in ["double", "all_orders", "Single"] {
             let error = parse(&format!("[shading]\nscattering = \"{wrong}\"")).unwrap_err();
             assert!(

@@ -13,10 +13,10 @@ use sheer_cloth::Method;
 
 use crate::CliError;
 use crate::frame::{FlagScene, FrameShading, StageTimes};
-use crate::scene::{
-    AllOrdersLookup, EvaluationPathName, Scattering, Scene, ShadingModel, ShadingSection,
-};
+use crate::scene::{Scene, ShadingModel, ShadingSection};
 use crate::window_image::{WindowImage, wanted_features};
+use sheer_slab::ScatteringOrders;
+use sheer_slab::render::{AllOrdersSampling, EvaluationPath};
 
 /// Options of the window from the command line.
 #[derive(Debug, Clone, Default)]
@@ -227,7 +227,7 @@ fn model_error_text(shading: &ShadingSection, sky_light: bool) -> String {
     };
     match shading.scattering {
         // The table's interpolation error against the solver (sheer-transport's README).
-        Scattering::AllOrders => format!(
+        ScatteringOrders::All => format!(
             "all orders: within 0.5 % (lit side) and 3.2 % (far side) of the exact slab{}; {single}",
             // The diffuse table's interpolation error for μ ≥ 0.05 (sheer-transport's README).
             if sky_light {
@@ -236,7 +236,7 @@ fn model_error_text(shading: &ShadingSection, sky_light: bool) -> String {
                 ""
             }
         ),
-        Scattering::Single => single,
+        ScatteringOrders::Single => single,
     }
 }
 
@@ -467,24 +467,24 @@ impl SheerApp {
                 });
                 ui.horizontal(|ui| {
                     ui.label("path");
-                    ui.selectable_value(&mut s.path, EvaluationPathName::Fragment, "fragment");
-                    ui.selectable_value(&mut s.path, EvaluationPathName::Vertex, "vertex");
-                    ui.selectable_value(&mut s.path, EvaluationPathName::Cpu, "CPU");
+                    ui.selectable_value(&mut s.path, EvaluationPath::PerFragment, "fragment");
+                    ui.selectable_value(&mut s.path, EvaluationPath::PerVertex, "vertex");
+                    ui.selectable_value(&mut s.path, EvaluationPath::Cpu, "CPU");
                 });
                 ui.horizontal(|ui| {
                     ui.label("scattering");
                     let before = s.scattering;
-                    ui.selectable_value(&mut s.scattering, Scattering::Single, "single");
-                    ui.selectable_value(&mut s.scattering, Scattering::AllOrders, "all orders");
+                    ui.selectable_value(&mut s.scattering, ScatteringOrders::Single, "single");
+                    ui.selectable_value(&mut s.scattering, ScatteringOrders::All, "all orders");
                     shading_changed |= s.scattering != before;
                 });
-                if s.scattering == Scattering::AllOrders && s.path == EvaluationPathName::Fragment {
+                if s.scattering == ScatteringOrders::All && s.path == EvaluationPath::PerFragment {
                     ui.horizontal(|ui| {
                         ui.label("table lookup");
                         let before = s.all_orders_lookup;
                         ui.selectable_value(
                             &mut s.all_orders_lookup,
-                            AllOrdersLookup::Vertex,
+                            AllOrdersSampling::PerVertex,
                             "per vertex",
                         )
                         .on_hover_text(
@@ -492,7 +492,7 @@ impl SheerApp {
                         );
                         ui.selectable_value(
                             &mut s.all_orders_lookup,
-                            AllOrdersLookup::Fragment,
+                            AllOrdersSampling::PerFragment,
                             "per fragment",
                         )
                         .on_hover_text("exact to the table in every pixel, slower");
@@ -1021,12 +1021,12 @@ mod panel_tests {
         // The τ1 field accepts [1e-3, 50] but the all-orders table covers [0.01, 10]: the renderer
         // refuses τ1 = 20, and the panel must go back to the τ1 the image still uses.
         let mut scene = Scene::builtin_default().unwrap();
-        scene.shading.scattering = Scattering::Single;
+        scene.shading.scattering = ScatteringOrders::Single;
         let before = scene.shading.clone();
-        scene.shading.scattering = Scattering::AllOrders;
+        scene.shading.scattering = ScatteringOrders::All;
         scene.shading.optical_thickness = [20.0; 3];
         let outside_table = |scene: &Scene| {
-            if scene.shading.scattering == Scattering::AllOrders
+            if scene.shading.scattering == ScatteringOrders::All
                 && scene.shading.optical_thickness.iter().any(|&t| t > 10.0)
             {
                 Err(CliError::new("τ1 outside the table".to_string()))

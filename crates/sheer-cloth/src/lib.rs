@@ -48,6 +48,7 @@ mod pipeline;
 #[allow(unsafe_code)]
 mod position_based;
 mod sim;
+mod solver;
 mod staggered;
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
@@ -59,7 +60,6 @@ pub mod wind;
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};
 pub use intersections::intersecting_triangle_pairs;
 pub use model::{ClothModel, GridShape, GridSpec, Spring, SpringKind};
-pub use parallel::thread_handoff_latency;
 pub use params::{
     Collider, Collisions, DEFAULT_FLAG_WIND_RENEWAL_INTERVAL, DivergenceLimits, FLAG_POLE_RADIUS,
     Method, SimParams, SpringParams, Wind,

@@ -314,90 +314,6 @@ fn start_team(threads: usize) -> Option<(Arc<Team>, Vec<JoinHandle<()>>)> {
     Some((team, handles))
 }
 
-/// How long a thread takes to see a value another thread has just stored: half the round trip of a
-/// counter bounced between two spinning threads (the median over batches of 64 round trips, so that a
-/// thread descheduled now and then does not count), over about `measuring_time` (at most 4000
-/// batches). `None` where the machine offers fewer than two CPUs, or where no round trip came back
-/// within four times `measuring_time` (two threads that cannot run at once; always for a zero time).
-///
-/// A team hands rows from core to core at every stage of a sub-step, so this latency is part of the
-/// cost of a step on two threads: on a virtual machine whose host sometimes places its two CPUs on cores
-/// far apart (about 30 ns near, about 150 ns far on a 2-core virtual machine), the default flag's
-/// frame on two threads follows it. `sheer bench sim` prints it beside two-thread figures.
-pub fn thread_handoff_latency(measuring_time: std::time::Duration) -> Option<std::time::Duration> {
-    use std::sync::atomic::AtomicU64;
-    use std::time::Instant;
-    /// Round trips timed together: a look at the clock for each would add its own cost to each.
-    const BATCH: u32 = 64;
-    const MOST_BATCHES: usize = 4000;
-    const STOP: u64 = u64::MAX;
-    if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
-        return None;
-    }
-    /// On cache lines of its own, so that nothing else shares its transfers.
-    #[repr(align(128))]
-    struct Counter(AtomicU64);
-    let counter = Counter(AtomicU64::new(0));
-    let counter = &counter.0;
-    // The counter once it is above `after` (the other thread has stored), or `STOP`; `None` if `give_up`
-    // says so first (looked at every few thousand spins, when the core is also yielded: on a machine
-    // whose other CPU is busy the two threads take turns on one, and would otherwise spin away whole
-    // time slices).
-    let await_above = |after: u64, give_up: &dyn Fn() -> bool| {
-        let mut spins = 0u32;
-        loop {
-            let value = counter.load(Ordering::Acquire);
-            if value == STOP || value > after {
-                return Some(value);
-            }
-            spins = spins.wrapping_add(1);
-            if spins.is_multiple_of(4096) {
-                if give_up() {
-                    return None;
-                }
-                std::thread::yield_now();
-            }
-            std::hint::spin_loop();
-        }
-    };
-    std::thread::scope(|scope| {
-        scope.spawn(|| {
-            let mut seen = 0;
-            // Answers each value with the next until told to stop.
-            while let Some(value) = await_above(seen, &|| false) {
-                if value == STOP {
-                    return;
-                }
-                counter.store(value + 1, Ordering::Release);
-                seen = value + 1;
-            }
-        });
-        let began = Instant::now();
-        // A machine too busy to run both threads at once would take a time slice a round trip.
-        let too_long = || began.elapsed() > measuring_time.saturating_mul(4);
-        // One round trip before the clock starts: the other thread is spinning by then.
-        counter.store(1, Ordering::Release);
-        let mut value = await_above(1, &too_long);
-        let start = Instant::now();
-        // The time of each batch of `BATCH` round trips.
-        let mut batches = Vec::new();
-        'measuring: while batches.len() < MOST_BATCHES && start.elapsed() < measuring_time {
-            let batch_start = Instant::now();
-            for _ in 0..BATCH {
-                let Some(last) = value else {
-                    break 'measuring;
-                };
-                counter.store(last + 1, Ordering::Release);
-                value = await_above(last + 1, &too_long);
-            }
-            batches.push(batch_start.elapsed());
-        }
-        counter.store(STOP, Ordering::Release);
-        batches.sort_unstable();
-        (!batches.is_empty()).then(|| batches[batches.len() / 2] / (2 * BATCH))
-    })
-}
-
 /// `f` of the team this thread leads, `None` without one.
 fn with_leading_team<R>(f: impl FnOnce(&Team) -> R) -> Option<R> {
     // SAFETY: `LEADING` points at a live team while `TeamSlot::lead` runs its body on this thread, and
@@ -694,27 +610,6 @@ mod tests {
             assert!(hits.iter().all(|&h| h == 1));
             assert_eq!(runners, 2);
         }
-    }
-
-    /// The hand-off is measured wherever two threads can run, and returns (the other thread told to
-    /// stop and joined); on one CPU there is nothing to measure.
-    #[test]
-    fn the_handoff_latency_is_measured_where_two_threads_run() {
-        // Long enough for two threads that must take turns with the other tests' (up to four times
-        // this before it gives up); it stops after its 4000 batches, about 20 ms, where they need not.
-        let measuring_time = std::time::Duration::from_millis(250);
-        let latency = thread_handoff_latency(measuring_time);
-        if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
-            assert_eq!(latency, None);
-            return;
-        }
-        let latency = latency.expect("two CPUs: a round trip comes back");
-        // Half a round trip: more than nothing, and within the time it was measured over.
-        assert!(latency > std::time::Duration::ZERO && latency < measuring_time);
-        // No time to measure in: nothing measured (and no panic for the longest time either, which
-        // stops after its 4000 batches).
-        assert_eq!(thread_handoff_latency(std::time::Duration::ZERO), None);
-        assert!(thread_handoff_latency(std::time::Duration::MAX).is_some());
     }
 
     #[test]

@@ -19,43 +19,24 @@
 //! `components.rs`): every loop here reads and writes x, y and z as three plain arrays.
 
 use glam::DVec3;
-use rayon::prelude::*;
 
 use std::ops::Range;
 
 use crate::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
-use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project, project_strips};
+use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project_strips};
 use crate::grid_wind::{
     cells_around, predict_row_with_forces, split_cell_run, split_grid_triangle_forces,
 };
-use crate::model::Spring;
 use crate::parallel::{
-    DisjointSlice, fill, one_index_per_thread, parts, team_in_equal_parts, team_threads,
+    DisjointSlice, one_index_per_thread, parts, team_in_equal_parts, team_threads,
 };
 use crate::params::SimParams;
 use crate::params::{Method, Wind};
 use crate::pipeline::{Pipeline, Progress, Stage};
 use crate::sim::{GridSweep, RowForces, Simulation, family_index};
+use crate::solver::tethered;
 use crate::vectorise::by_cpu;
 use crate::wavefront::Wavefront;
-
-/// One distance constraint as the solver streams it, in colour order. 32 bytes: per-family constants
-/// live in a 3-entry table and inverse masses in the particle array, so that the constraints of large
-/// cloths take half the cache and memory bandwidth a 64-byte record did (the solver streams all of
-/// them every sub-step). Rebuilt when the sub-step length or the parameters change.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct PackedConstraint {
-    a: u32,
-    b: u32,
-    rest_length: f64,
-    /// PBD: k'/(w_a + w_b); XPBD: 1/((1 + γ)(w_a + w_b) + α̃); 0 when the constraint is inactive.
-    inverse_denominator: f64,
-    /// Index into the per-family (α̃, γ) table of the sub-step.
-    family: u8,
-}
-
-/// Batches smaller than this run on one thread even in parallel mode: rayon's fork–join costs more.
-const MIN_PARALLEL_BATCH: usize = 2048;
 
 /// A grid's sweeps run as one wavefront a sub-step from this many particles: below it the cloth's data
 /// largely stays in the last-level cache from pass to pass, and pass by pass measured as fast or faster.
@@ -115,8 +96,9 @@ thread_local! {
 const PARTICLE_GRAIN: usize = 4096;
 
 impl Simulation {
-    /// One sub-step of length `h` at time `t`. `pbd_stiffness` selects PBD with that dimensionless
-    /// stiffness; `None` selects XPBD with compliance `1/k` from the springs.
+    /// One sub-step of length `h` at time `t` on a grid: [`crate::solver`]'s sub-step through the fast
+    /// paths. `pbd_stiffness` selects PBD with that dimensionless stiffness; `None` selects XPBD with
+    /// compliance `1/k` from the springs.
     pub(crate) fn position_based_substep(
         &mut self,
         h: f64,
@@ -124,49 +106,8 @@ impl Simulation {
         iterations: u32,
         pbd_stiffness: Option<f64>,
     ) {
-        let on_grid = self.grid_constraints.is_some();
-        // A grid sums each row's forces where it predicts the row when it can.
-        let row_forces = if on_grid {
-            self.prepare_row_forces(t)
-        } else {
-            // The forces read the joined state.
-            self.join_split_state();
-            self.compute_forces(t, false);
-            None
-        };
-        let parallel = self.parallel();
-        if !on_grid {
-            // A grid predicts row by row inside its constraint passes (`project_grid_constraints`).
-            let Simulation {
-                split_positions,
-                split_velocities,
-                previous_positions,
-                forces,
-                split_forces,
-                inverse_masses,
-                ..
-            } = self;
-            split_forces.split_from(forces);
-            let (inverse_masses, forces) = (&inverse_masses[..], split_forces.as_ref());
-            let (positions, velocities, previous_positions) = (
-                split_positions.disjoint(),
-                split_velocities.disjoint(),
-                previous_positions.disjoint(),
-            );
-            parts(inverse_masses.len(), parallel, PARTICLE_GRAIN, |range| {
-                // SAFETY: the parts are disjoint.
-                unsafe {
-                    predict_positions(
-                        h,
-                        &inverse_masses[range.clone()],
-                        forces.range(range.clone()),
-                        positions.slice_mut(range.clone()),
-                        velocities.slice_mut(range.clone()),
-                        previous_positions.slice_mut(range),
-                    )
-                }
-            });
-        }
+        // The rows sum their forces where they predict them (`project_grid_constraints`) when they can.
+        let row_forces = self.prepare_row_forces(t);
         let family_constants = self.solver_constants(h, iterations, pbd_stiffness);
         let is_pbd = pbd_stiffness.is_some();
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
@@ -593,7 +534,7 @@ impl Simulation {
         };
         let family = self.solver_constants(h, iterations, pbd_stiffness);
         // The first sub-step's pins; the pass moves them on at the end of each sub-step.
-        self.prescribe_pins(0, substeps, h);
+        self.prescribe_pins(0, substeps, h, true);
         let ran = if pbd_stiffness.is_some() {
             self.project_grid_constraints::<true, false>(
                 h,
@@ -619,100 +560,8 @@ impl Simulation {
         ran
     }
 
-    /// The per-family constants of a sub-step of length `h` (s) with `iterations` sweeps (PBD with
-    /// stiffness `pbd_stiffness`, else XPBD), with the constraints' inverted divisors brought up to date.
-    fn solver_constants(
-        &mut self,
-        h: f64,
-        iterations: u32,
-        pbd_stiffness: Option<f64>,
-    ) -> [FamilyConstants; 3] {
-        let parallel = self.parallel();
-        // PBD: Müller et al. 2007 §3.3 make the stiffness independent of the iteration count by
-        // k' = 1 − (1 − k)^(1/n). Each family keeps its stiffness relative to stretch.
-        let stretch_stiffness = self.family[0].0;
-        let pbd_family: [f64; 3] = std::array::from_fn(|f| match pbd_stiffness {
-            Some(k) if self.family[f].0 > 0.0 => {
-                let relative = if stretch_stiffness > 0.0 {
-                    (self.family[f].0 / stretch_stiffness).min(1.0)
-                } else {
-                    1.0
-                };
-                1.0 - (1.0 - k * relative).powf(1.0 / iterations as f64)
-            }
-            _ => 0.0,
-        });
-        // Per-family constants of this sub-step. XPBD, Macklin et al. 2016 eqs. (18) and (26):
-        // α̃ = α/h², γ = α β / h with α = 1/k (m/N) and β = c (N·s/m). PBD: the correction is scaled by k'.
-        let constants: [(f64, f64, f64); 3] = std::array::from_fn(|f| {
-            let (stiffness, damping) = self.family[f];
-            if stiffness == 0.0 {
-                (0.0, 0.0, 0.0)
-            } else if pbd_stiffness.is_some() {
-                (pbd_family[f], 0.0, 0.0)
-            } else {
-                let compliance = 1.0 / stiffness;
-                (1.0, compliance / (h * h), compliance * damping / h)
-            }
-        });
-        let is_pbd = pbd_stiffness.is_some();
-        // The divisor of each constraint's update depends only on h, the parameters and the masses, so
-        // it is inverted once and reused until one of them changes: the inner loop then has a single
-        // division and a single square root, which bound its throughput.
-        let key = (h, constants, is_pbd);
-        if self.denominator_key != Some(key) {
-            let Simulation {
-                springs,
-                inverse_masses,
-                packed,
-                grid_constraints,
-                ..
-            } = self;
-            let inverse_denominator = |spring: &Spring| {
-                let (scale, scaled_compliance, gamma) = constants[family_index(spring.kind)];
-                let w = inverse_masses[spring.a as usize] + inverse_masses[spring.b as usize];
-                if scale == 0.0 || w == 0.0 {
-                    0.0
-                } else if is_pbd {
-                    scale / w
-                } else {
-                    1.0 / ((1.0 + gamma) * w + scaled_compliance)
-                }
-            };
-            if let Some(grid) = grid_constraints {
-                let GridConstraints {
-                    springs,
-                    inverse_denominators,
-                    ..
-                } = grid;
-                fill(inverse_denominators, parallel, |c| {
-                    inverse_denominator(&springs[c])
-                });
-            } else {
-                packed.resize(springs.len(), PackedConstraint::default());
-                fill(packed, parallel, |c| {
-                    let spring = &springs[c];
-                    PackedConstraint {
-                        a: spring.a,
-                        b: spring.b,
-                        rest_length: spring.rest_length,
-                        inverse_denominator: inverse_denominator(spring),
-                        family: family_index(spring.kind) as u8,
-                    }
-                });
-            }
-            self.denominator_key = Some(key);
-        }
-        let family_constants: [FamilyConstants; 3] = std::array::from_fn(|f| FamilyConstants {
-            scaled_compliance: constants[f].1,
-            gamma: constants[f].2,
-        });
-        family_constants
-    }
-
-    /// The constraint sweeps of a sub-step of length `h` (s): a grid's
-    /// ([`project_grid_constraints`](Simulation::project_grid_constraints), with `row_forces`) or a
-    /// general mesh's ([`project_mesh_constraints`](Simulation::project_mesh_constraints)).
+    /// The constraint sweeps of a grid's sub-step of length `h` (s), with `row_forces`
+    /// ([`project_grid_constraints`](Simulation::project_grid_constraints)).
     fn project_constraints<const PBD: bool, const MULTIPLIERS: bool>(
         &mut self,
         h: f64,
@@ -720,135 +569,10 @@ impl Simulation {
         family: [FamilyConstants; 3],
         row_forces: Option<RowForces>,
     ) {
-        if self.grid_constraints.is_some() {
-            self.project_grid_constraints::<PBD, MULTIPLIERS>(
-                h, iterations, family, row_forces, None,
-            );
-        } else {
-            self.project_mesh_constraints::<PBD, MULTIPLIERS>(h, iterations, family)
-        }
+        self.project_grid_constraints::<PBD, MULTIPLIERS>(h, iterations, family, row_forces, None);
     }
 
-    /// `iterations` Gauss–Seidel sweeps over a general mesh's constraints, colour batch by colour batch,
-    /// each followed by the long-range attachments, then the velocities from the position change over
-    /// the sub-step `h` (s) in the same pass as the last attachments. Grids go
-    /// [`project_grid_constraints`](Simulation::project_grid_constraints); both project with [`project`].
-    fn project_mesh_constraints<const PBD: bool, const MULTIPLIERS: bool>(
-        &mut self,
-        h: f64,
-        iterations: u32,
-        family: [FamilyConstants; 3],
-    ) {
-        let parallel = self.parallel();
-        let Simulation {
-            positions: joined_positions,
-            joined_previous,
-            split_positions,
-            split_velocities: velocities,
-            previous_positions,
-            colours,
-            uncoloured,
-            lambdas,
-            packed,
-            tether_anchors,
-            tether_lengths,
-            tether_run_ends,
-            tether_pin_positions,
-            pinned_indices,
-            params,
-            inverse_masses,
-            ..
-        } = self;
-        let particle_count = split_positions.len();
-        let inverse_masses = &inverse_masses[..];
-        if MULTIPLIERS {
-            lambdas.fill(0.0);
-        }
-        let tethers = Tethers::of_substep(
-            params,
-            pinned_indices,
-            tether_anchors,
-            tether_lengths,
-            tether_run_ends,
-            &mut tether_pin_positions[..pinned_indices.len()],
-        );
-        if let Some(tethers) = &tethers {
-            // SAFETY: no pass is running.
-            unsafe { tethers.gather(0..particle_count, &split_positions.disjoint()) };
-        }
-        // The colour batches gather and scatter particles anywhere in the cloth, where a joined vector is
-        // one cache line and a split one three: on the split state a mesh's sub-step took 1.13–1.36× as
-        // long (six interleaved runs of small-steps XPBD ×20 on the default flag as a triangle mesh). So
-        // the batches run on joined copies of the positions and the start positions (`positions`, free
-        // during a position-based step, and `joined_previous`), the per-particle passes on the split state.
-        split_positions.join_into(joined_positions);
-        previous_positions.join_into(joined_previous);
-        let start = &joined_previous[..];
-        let positions = DisjointSlice::new(joined_positions);
-        let lambdas = DisjointSlice::new(lambdas);
-        let packed = &packed[..];
-        let solve = |c: usize| {
-            let k = &packed[c];
-            let (a, b) = (k.a as usize, k.b as usize);
-            // SAFETY: the colouring puts no two springs sharing a particle in one batch, and each spring
-            // owns its multiplier, so no index is touched by two threads at once.
-            unsafe {
-                let (mut x_a, mut x_b) = (positions.get(a), positions.get(b));
-                let mut lambda = if MULTIPLIERS { lambdas.get(c) } else { 0.0 };
-                // The damping term stays in (with γ = 0 it multiplies out): meshes are not the hot path.
-                project::<PBD, MULTIPLIERS, true>(
-                    &mut x_a,
-                    &mut x_b,
-                    start[a],
-                    start[b],
-                    inverse_masses[a],
-                    inverse_masses[b],
-                    k.rest_length,
-                    k.inverse_denominator,
-                    &mut lambda,
-                    family[k.family as usize],
-                );
-                positions.set(a, x_a);
-                positions.set(b, x_b);
-                if MULTIPLIERS {
-                    lambdas.set(c, lambda);
-                }
-            }
-        };
-        let previous = previous_positions.disjoint();
-        let velocities = velocities.disjoint();
-        for iteration in 0..iterations {
-            for range in colours.iter() {
-                if parallel && range.len() >= MIN_PARALLEL_BATCH {
-                    range
-                        .clone()
-                        .into_par_iter()
-                        .with_min_len(256)
-                        .for_each(solve);
-                } else {
-                    range.clone().for_each(solve);
-                }
-            }
-            uncoloured.clone().for_each(solve);
-            let last = iteration + 1 == iterations;
-            let velocities = last.then_some((&velocities, 1.0 / h));
-            if tethers.is_some() || last {
-                // SAFETY: no pass is running, so no other thread touches `positions`.
-                split_positions.split_from(unsafe { positions.slice(0..particle_count) });
-                let split = split_positions.disjoint();
-                parts(particle_count, parallel, PARTICLE_GRAIN, |range| {
-                    // SAFETY: the parts are disjoint.
-                    unsafe { end_sweep(range, tethers.as_ref(), velocities, &split, &previous) }
-                });
-                if !last {
-                    // SAFETY: the pass above has finished; no other thread touches `positions`.
-                    split_positions.join_into(unsafe { positions.slice_mut(0..particle_count) });
-                }
-            }
-        }
-    }
-
-    /// As [`project_mesh_constraints`](Simulation::project_mesh_constraints), for a grid: strip by
+    /// A grid's sub-step after [`crate::solver`] (the plain code it must match bit for bit): strip by
     /// strip in its twelve batches ([`GridConstraints`]), the sub-step's wind shares (when due), forces
     /// and prediction over `h` (s) first. The batches within rows that open and close a sweep (bending
     /// and stretch along rows) share a pass over the rows with the per-particle work next to them (the
@@ -1785,18 +1509,6 @@ by_cpu! {
             let x = tethered(DVec3::new(x_x[i], x_y[i], x_z[i]), anchor, lengths[i]);
             (x_x[i], x_y[i], x_z[i]) = (x.x, x.y, x.z);
         }
-    }
-}
-
-/// `x` (m) pulled back onto the sphere of radius `length` (m) around `anchor` (m) if it lies outside.
-#[inline(always)]
-fn tethered(x: DVec3, anchor: DVec3, length: f64) -> DVec3 {
-    let offset = x - anchor;
-    let distance = offset.length();
-    if distance > length {
-        anchor + offset * (length / distance)
-    } else {
-        x
     }
 }
 

@@ -140,6 +140,16 @@ pub(crate) fn team_claims_its_passes(particles: usize, threads: usize) -> bool {
     particles >= TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD.saturating_mul(threads)
 }
 
+/// Which code a step runs: the fast paths (strips, row passes, wavefronts, threads) where a grid has
+/// them, or the plain code of `solver.rs` for every cloth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Path {
+    Fast,
+    #[cfg_attr(not(test), allow(dead_code))]
+    // production steps a general mesh plainly on `Fast` too
+    Plain,
+}
+
 /// A running cloth simulation. Build it from a [`ClothModel`] and [`SimParams`], then call
 /// [`step`](Simulation::step).
 #[derive(Clone, Debug)]
@@ -196,10 +206,8 @@ pub struct Simulation {
     pub(crate) split_positions: Xyz,
     pub(crate) split_velocities: Xyz,
     pub(crate) previous_positions: Xyz,
-    /// The start positions joined, for a general mesh's constraint batches.
+    /// The start positions of a sub-step on the joined state (a general mesh, `solver.rs`).
     pub(crate) joined_previous: Vec<DVec3>,
-    /// `forces` split, for the prediction of a general mesh.
-    pub(crate) split_forces: Xyz,
     /// The position-based methods' wind shares on a grid ([`SplitShares`]).
     pub(crate) split_shares: SplitShares,
     pub(crate) lambdas: Vec<f64>,
@@ -212,7 +220,7 @@ pub struct Simulation {
     pub(crate) wind_stale: bool,
     pub(crate) cg: CgScratch,
     /// Position-based solvers: the constraints with their per-step constants, valid for `denominator_key`.
-    pub(crate) packed: Vec<crate::position_based::PackedConstraint>,
+    pub(crate) packed: Vec<crate::solver::PackedConstraint>,
     pub(crate) denominator_key: Option<SolverKey>,
     /// Helper threads of the position-based grid solver (empty until a parallel step needs them).
     pub(crate) team: TeamSlot,
@@ -464,7 +472,6 @@ impl Simulation {
             split_velocities: Xyz::zeros(n),
             previous_positions: Xyz::zeros(n),
             joined_previous: vec![DVec3::ZERO; n],
-            split_forces: Xyz::zeros(n),
             split_shares: [Xyz::zeros(cells), Xyz::zeros(cells)],
             lambdas: vec![0.0; spring_count],
             backup_positions: vec![DVec3::ZERO; n],
@@ -486,6 +493,12 @@ impl Simulation {
     /// On divergence (a non-finite value, a speed or a strain beyond [`DivergenceLimits`](crate::DivergenceLimits))
     /// the step is undone and [`StepError::Diverged`] returned: the state stays the last good one.
     pub fn step(&mut self, dt: f64) -> Result<StepInfo, StepError> {
+        self.step_through(dt, Path::Fast)
+    }
+
+    /// [`step`](Simulation::step) through the fast paths where the cloth has them (`Path::Fast`), or
+    /// through the plain code everywhere (`Path::Plain`, which the fast paths are tested against).
+    pub(crate) fn step_through(&mut self, dt: f64, path: Path) -> Result<StepInfo, StepError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(StepError::InvalidTimeStep(dt));
         }
@@ -507,7 +520,8 @@ impl Simulation {
         // sub-step on a grid, too short for rayon's hand-off.
         let team_threads = match self.grid {
             Some(grid)
-                if self.parallel()
+                if path == Path::Fast
+                    && self.parallel()
                     && self.grid_constraints.is_some()
                     && self.params.method.is_position_based() =>
             {
@@ -515,9 +529,9 @@ impl Simulation {
             }
             _ => 1,
         };
-        // The position-based methods work on the state split by component from here to the end of the
-        // step (`components.rs`).
-        let split = self.params.method.is_position_based();
+        // The position-based methods on a grid work on the state split by component from here to the end
+        // of the step (`components.rs`); on a general mesh they step the joined state (`solver.rs`).
+        let split = path == Path::Fast && self.steps_split();
         if split {
             self.split_positions.split_from(&self.positions);
             self.split_velocities.split_from(&self.velocities);
@@ -539,7 +553,7 @@ impl Simulation {
                 if wind.renewal_due(s, h) {
                     self.wind_stale = true;
                 }
-                self.prescribe_pins(s, substeps, h);
+                self.prescribe_pins(s, substeps, h, split);
                 match self.params.method {
                     Method::ExplicitEuler { .. } => self.explicit_euler_substep(h, t),
                     Method::SymplecticEuler { .. } => self.symplectic_euler_substep(h, t),
@@ -558,16 +572,16 @@ impl Simulation {
                         iterations,
                         stiffness,
                         ..
-                    } => self.position_based_substep(h, t, iterations, Some(stiffness)),
+                    } => self.position_based(split, h, t, iterations, Some(stiffness)),
                     Method::Xpbd { iterations, .. } => {
-                        self.position_based_substep(h, t, iterations, None)
+                        self.position_based(split, h, t, iterations, None)
                     }
-                    Method::SmallStepsXpbd { .. } => self.position_based_substep(h, t, 1, None),
+                    Method::SmallStepsXpbd { .. } => self.position_based(split, h, t, 1, None),
                 }
                 if self.params.collisions.any() {
-                    self.project_contacts(h);
+                    self.project_contacts(h, split);
                 }
-                self.place_pins(s, substeps);
+                self.place_pins(s, substeps, split);
             }
             if split {
                 self.join_split_state();
@@ -594,9 +608,23 @@ impl Simulation {
         self.pin_starts[k].lerp(self.pin_targets[k], fraction)
     }
 
-    /// Gives pinned particles the velocity that carries them along their path during sub-step `s`.
-    pub(crate) fn prescribe_pins(&mut self, s: u32, substeps: u32, h: f64) {
-        let split = self.params.method.is_position_based();
+    /// Whether a step works on the state split by component: the position-based methods on a grid.
+    pub(crate) fn steps_split(&self) -> bool {
+        self.params.method.is_position_based() && self.grid_constraints.is_some()
+    }
+
+    /// One position-based sub-step: on a grid's split state through the fast paths, else plain.
+    fn position_based(&mut self, split: bool, h: f64, t: f64, iterations: u32, pbd: Option<f64>) {
+        if split {
+            self.position_based_substep(h, t, iterations, pbd);
+        } else {
+            self.plain_position_based_substep(h, t, iterations, pbd);
+        }
+    }
+
+    /// Gives pinned particles the velocity that carries them along their path during sub-step `s`, in
+    /// the split state (`split`) or the joined one.
+    pub(crate) fn prescribe_pins(&mut self, s: u32, substeps: u32, h: f64, split: bool) {
         for k in 0..self.pinned_indices.len() {
             let from = self.pin_position(k, s as f64 / substeps as f64);
             let to = self.pin_position(k, (s + 1) as f64 / substeps as f64);
@@ -613,8 +641,7 @@ impl Simulation {
     }
 
     /// Puts pinned particles exactly on their path at the end of sub-step `s`.
-    fn place_pins(&mut self, s: u32, substeps: u32) {
-        let split = self.params.method.is_position_based();
+    pub(crate) fn place_pins(&mut self, s: u32, substeps: u32, split: bool) {
         for k in 0..self.pinned_indices.len() {
             let i = self.pinned_indices[k] as usize;
             let at = self.pin_position(k, (s + 1) as f64 / substeps as f64);
@@ -626,9 +653,10 @@ impl Simulation {
         }
     }
 
-    /// Projects the contacts of a position-based sub-step of `h` (s) on the split state, and adds what
-    /// they moved a particle over `h` to its velocity: as if projected before the velocity update.
-    pub(crate) fn project_contacts(&mut self, h: f64) {
+    /// Projects the contacts of a position-based sub-step of `h` (s) on the split state (`split`) or the
+    /// joined one, and adds what they moved a particle over `h` to its velocity: as if projected before
+    /// the velocity update.
+    pub(crate) fn project_contacts(&mut self, h: f64, split: bool) {
         // Large cloths list their contact pairs on rayon's threads (the same list).
         let parallel = self.parallel();
         let Simulation {
@@ -640,13 +668,21 @@ impl Simulation {
             split_positions,
             split_velocities,
             previous_positions,
+            positions,
+            velocities,
+            joined_previous,
             ..
         } = self;
         let n = rest_positions.len();
         contacts.start.resize(n, DVec3::ZERO);
         contacts.now.resize(n, DVec3::ZERO);
-        previous_positions.join_into(&mut contacts.start);
-        split_positions.join_into(&mut contacts.now);
+        if split {
+            previous_positions.join_into(&mut contacts.start);
+            split_positions.join_into(&mut contacts.now);
+        } else {
+            contacts.start.copy_from_slice(joined_previous);
+            contacts.now.copy_from_slice(positions);
+        }
         contacts.project(
             &params.collisions,
             rest_positions,
@@ -655,11 +691,22 @@ impl Simulation {
             parallel,
         );
         for (i, &after) in contacts.now.iter().enumerate() {
-            let before = split_positions.as_ref().at(i);
-            if after != before {
+            let before = if split {
+                split_positions.as_ref().at(i)
+            } else {
+                positions[i]
+            };
+            if after == before {
+                continue;
+            }
+            let moved = (after - before) / h;
+            if split {
                 split_positions.set(i, after);
                 let v = split_velocities.as_ref().at(i);
-                split_velocities.set(i, v + (after - before) / h);
+                split_velocities.set(i, v + moved);
+            } else {
+                positions[i] = after;
+                velocities[i] += moved;
             }
         }
     }

@@ -5,7 +5,7 @@
 //! Run: `cargo run -p sheer-normals --release --example toward_light`
 
 use glam::Vec3;
-use sheer_normals::{Light, NormalUpdater, NormalsError, lit_side_cosines};
+use sheer_normals::{Face, Light, NormalUpdater, NormalsError, lit_side_cosines};
 
 fn main() -> Result<(), NormalsError> {
     let side = 3usize;
@@ -45,7 +45,7 @@ fn main() -> Result<(), NormalsError> {
                 "  vertex {vertex} at {position}: normal {normal}, mu0 = {:.4}, mu = {:.4}, {}",
                 side.mu0,
                 side.mu,
-                if side.eye_on_lit_side {
+                if side.face == Face::Lit {
                     "eye on lit side: eq. (7)"
                 } else {
                     "eye on far side: eq. (8)"

@@ -15,7 +15,7 @@
 //!
 //! ```
 //! use glam::Vec3;
-//! use sheer_normals::{Light, NormalUpdater, lit_side_cosines};
+//! use sheer_normals::{Face, Light, NormalUpdater, lit_side_cosines};
 //!
 //! // One quad in the plane z = 0, its two triangles wound inconsistently.
 //! let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
@@ -30,7 +30,7 @@
 //!
 //! // An eye above the sheet sees it back-lit: eq. (8).
 //! let side = lit_side_cosines(normals[0], light - positions[0], Vec3::new(0.0, 0.0, 2.0))?;
-//! assert!(!side.eye_on_lit_side && side.mu0 > 0.0 && side.mu > 0.0);
+//! assert!(side.face == Face::Far && side.mu0 > 0.0 && side.mu > 0.0);
 //! # Ok::<(), sheer_normals::NormalsError>(())
 //! ```
 
@@ -47,7 +47,7 @@ mod vector;
 
 pub use error::NormalsError;
 pub use light::{Light, MAX_COORDINATE};
-pub use lit_side::{LIT_SIDE_WGSL, LitSide, lit_side_cosines};
+pub use lit_side::{Face, LIT_SIDE_WGSL, LitSide, LitSideVector, lit_side_cosines};
 pub use updater::{
     Execution, NormalOptions, NormalUpdater, PARALLEL_MIN_VERTICES, Weighting,
     vertex_normals_toward_light,

@@ -28,7 +28,7 @@
 //! eq. (7), with μ = 0. A zero `to_light` (light at the fragment) gives μ0 = 0; a zero `to_eye`
 //! (eye at the fragment) gives μ = 0.
 
-use glam::{Vec3, Vec3A};
+use glam::{DVec3, Vec3, Vec3A};
 
 use crate::error::NormalsError;
 use crate::vector::unit_or_none;
@@ -38,61 +38,135 @@ use crate::vector::unit_or_none;
 /// `fn lit_side_cosines`: no entry points, no bindings.
 pub const LIT_SIDE_WGSL: &str = include_str!("../../../shaders/lit_side.wgsl");
 
-/// The cosines of one fragment and which equation of the paper applies.
+/// Which face of the slab the eye sees, and so which of the paper's equations applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Face {
+    /// The eye is on the lit side (front-lit surface): eq. (7) with L+ of eq. (4).
+    Lit,
+    /// The eye is on the far side (back-lit surface): eq. (8) with L− of eq. (5).
+    Far,
+}
+
+/// The cosines of one fragment and which equation of the paper applies, in `f32` (the shader's
+/// precision, from `Vec3`) or `f64` (CPU references, from `DVec3`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LitSide {
+pub struct LitSide<S = f32> {
     /// μ0 = cos θ0 = n · ω0′ ≥ 0 with n turned toward the light (eq. 4–6); in [0, 1] up to a few
     /// ulps of rounding.
-    pub mu0: f32,
+    pub mu0: S,
     /// μ = |n · ω| ≥ 0, the cosine between the normal and the eye direction on the eye's side of
     /// the slab (already negated for the back-lit case, as eq. 8 with eq. 5 needs it).
-    pub mu: f32,
-    /// `true`: eye on the lit side, front-lit, evaluate eq. (7) with L+ of eq. (4).
-    /// `false`: eye on the far side, back-lit, evaluate eq. (8) with L− of eq. (5).
-    pub eye_on_lit_side: bool,
+    pub mu: S,
+    /// The face the eye is on: [`Face::Lit`], eq. (7) with L+ of eq. (4); [`Face::Far`], eq. (8)
+    /// with L− of eq. (5).
+    pub face: Face,
+}
+
+/// A 3-vector the lit-side rule takes: glam's `Vec3` or `DVec3` (sealed).
+pub trait LitSideVector: sealed::Sealed + Copy + std::ops::Neg<Output = Self> {
+    /// `f32` or `f64`.
+    type Scalar: Copy + PartialOrd + Default;
+    /// The unit vector along `self`, or `None` when it is zero or not finite (scale-robust).
+    fn unit(self) -> Option<Self>;
+    /// Every component finite.
+    fn finite(self) -> bool;
+    /// The dot product.
+    fn dot_with(self, other: Self) -> Self::Scalar;
+    /// |s|, which also turns −0 into +0.
+    fn magnitude(s: Self::Scalar) -> Self::Scalar;
+    /// The zero vector.
+    const ZERO: Self;
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for glam::Vec3 {}
+    impl Sealed for glam::DVec3 {}
+}
+
+impl LitSideVector for Vec3 {
+    type Scalar = f32;
+    fn unit(self) -> Option<Self> {
+        unit_or_none(self.into()).map(Vec3::from)
+    }
+    fn finite(self) -> bool {
+        self.is_finite()
+    }
+    fn dot_with(self, other: Self) -> f32 {
+        Vec3A::from(self).dot(other.into())
+    }
+    fn magnitude(s: f32) -> f32 {
+        s.abs()
+    }
+    const ZERO: Self = Vec3::ZERO;
+}
+
+impl LitSideVector for DVec3 {
+    type Scalar = f64;
+    fn unit(self) -> Option<Self> {
+        // f64's exponent range leaves the unit length of any scene vector clear of under- and
+        // overflow; `normalize_or_zero` returns zero for a zero or non-finite vector.
+        Some(self.normalize_or_zero()).filter(|unit| *unit != DVec3::ZERO)
+    }
+    fn finite(self) -> bool {
+        self.is_finite()
+    }
+    fn dot_with(self, other: Self) -> f64 {
+        self.dot(other)
+    }
+    fn magnitude(s: f64) -> f64 {
+        s.abs()
+    }
+    const ZERO: Self = DVec3::ZERO;
 }
 
 /// The lit-side rule at one fragment. `normal` is the interpolated vertex normal (any length, any
 /// sign), `to_light` the vector from the fragment toward the light (ω0′ up to length) and `to_eye`
 /// the vector from the fragment toward the eye (ω up to length); none needs to be unit length.
+/// `Vec3` gives the shader's `f32` cosines, `DVec3` the `f64` ones of a CPU reference.
 ///
 /// Errors: [`NormalsError::NonFiniteVector`] if any component is NaN or infinite. Zero vectors are
 /// defined cases (see the module documentation).
-pub fn lit_side_cosines(
-    normal: Vec3,
-    to_light: Vec3,
-    to_eye: Vec3,
-) -> Result<LitSide, NormalsError> {
+pub fn lit_side_cosines<V: LitSideVector>(
+    normal: V,
+    to_light: V,
+    to_eye: V,
+) -> Result<LitSide<V::Scalar>, NormalsError> {
     for (what, v) in [
         ("normal", normal),
         ("to_light", to_light),
         ("to_eye", to_eye),
     ] {
-        if !v.is_finite() {
+        if !v.finite() {
             return Err(NormalsError::NonFiniteVector { what });
         }
     }
-    let light = unit_or_none(to_light.into()).unwrap_or(Vec3A::ZERO);
-    let eye = unit_or_none(to_eye.into()).unwrap_or(Vec3A::ZERO);
-    let Some(normal) = unit_or_none(normal.into()) else {
+    let zero = V::Scalar::default();
+    let light = to_light.unit().unwrap_or(V::ZERO);
+    let eye = to_eye.unit().unwrap_or(V::ZERO);
+    let Some(normal) = normal.unit() else {
         return Ok(LitSide {
-            mu0: 0.0,
-            mu: 0.0,
-            eye_on_lit_side: true,
+            mu0: zero,
+            mu: zero,
+            face: Face::Lit,
         });
     };
     // Re-orient at the fragment: interpolation may have carried the normal past the terminator.
-    let normal = if normal.dot(light) < 0.0 {
+    let normal = if normal.dot_with(light) < zero {
         -normal
     } else {
         normal
     };
-    // After the flip the dot is ≥ 0 or −0; abs only turns −0 into +0.
-    let mu0 = normal.dot(light).abs();
-    let signed_mu = normal.dot(eye);
+    // After the flip the dot is ≥ 0 or −0; the magnitude only turns −0 into +0.
+    let mu0 = V::magnitude(normal.dot_with(light));
+    let signed_mu = normal.dot_with(eye);
     Ok(LitSide {
         mu0,
-        mu: signed_mu.abs(),
-        eye_on_lit_side: signed_mu >= 0.0,
+        mu: V::magnitude(signed_mu),
+        face: if signed_mu >= zero {
+            Face::Lit
+        } else {
+            Face::Far
+        },
     })
 }

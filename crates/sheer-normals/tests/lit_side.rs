@@ -4,7 +4,7 @@
 mod common;
 
 use glam::Vec3;
-use sheer_normals::{Light, LitSide, NormalsError, lit_side_cosines};
+use sheer_normals::{Face, Light, LitSide, NormalsError, lit_side_cosines};
 
 #[test]
 fn front_lit_and_back_lit_pick_equation_7_and_8() {
@@ -16,7 +16,7 @@ fn front_lit_and_back_lit_pick_equation_7_and_8() {
         LitSide {
             mu0: 0.8,
             mu: 0.6,
-            eye_on_lit_side: true
+            face: Face::Lit
         }
     );
     let below = lit_side_cosines(Vec3::Z, to_light, Vec3::new(0.8, 0.0, -0.6)).unwrap();
@@ -25,7 +25,7 @@ fn front_lit_and_back_lit_pick_equation_7_and_8() {
         LitSide {
             mu0: 0.8,
             mu: 0.6,
-            eye_on_lit_side: false
+            face: Face::Far
         }
     );
     // A normal handed in with the wrong sign, or unnormalised, changes nothing.
@@ -40,7 +40,7 @@ fn degenerate_vectors_are_defined_cases() {
     let grazing = LitSide {
         mu0: 0.0,
         mu: 0.0,
-        eye_on_lit_side: true,
+        face: Face::Lit,
     };
     // Zero interpolated normal (two opposite vertex normals, halfway).
     assert_eq!(
@@ -53,7 +53,7 @@ fn degenerate_vectors_are_defined_cases() {
         LitSide {
             mu0: 0.0,
             mu: 1.0,
-            eye_on_lit_side: false
+            face: Face::Far
         }
     );
     // Eye exactly at the fragment, and an eye grazing the surface: μ = 0 on the lit side.
@@ -62,7 +62,7 @@ fn degenerate_vectors_are_defined_cases() {
         LitSide {
             mu0: 1.0,
             mu: 0.0,
-            eye_on_lit_side: true
+            face: Face::Lit
         }
     );
     assert_eq!(
@@ -70,7 +70,7 @@ fn degenerate_vectors_are_defined_cases() {
         LitSide {
             mu0: 1.0,
             mu: 0.0,
-            eye_on_lit_side: true
+            face: Face::Lit
         }
     );
     // Light in the tangent plane: μ0 = 0, the given sign of the normal decides the eye's side.
@@ -79,7 +79,7 @@ fn degenerate_vectors_are_defined_cases() {
         LitSide {
             mu0: 0.0,
             mu: 1.0,
-            eye_on_lit_side: true
+            face: Face::Lit
         }
     );
     // Tiny and huge inputs normalise without underflow or overflow.
@@ -94,7 +94,7 @@ fn degenerate_vectors_are_defined_cases() {
         LitSide {
             mu0: 1.0,
             mu: 1.0,
-            eye_on_lit_side: false
+            face: Face::Far
         }
     );
 }
@@ -213,7 +213,7 @@ fn interpolated_normals_crossing_the_terminator_keep_mu0_nonnegative_and_continu
                     // The re-orientation flips the normal, so unless the eye itself crossed the
                     // tangent plane in the same step, the eye changes side: eq. (7) ↔ eq. (8).
                     if (raw_eye < 0.0) == (raw_eye_before < 0.0) {
-                        assert_ne!(side.eye_on_lit_side, before.eye_on_lit_side);
+                        assert_ne!(side.face, before.face);
                     }
                 }
             }

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use proptest::prelude::*;
-use sheer_normals::{Light, NormalUpdater, lit_side_cosines};
+use sheer_normals::{Face, Light, NormalUpdater, lit_side_cosines};
 
 /// Unit length to within the rounding of one square root and one division per component (a few
 /// ulps of 1): 4ε.
@@ -96,7 +96,7 @@ proptest! {
             prop_assert!((side.mu - n.dot(e).abs()).abs() <= 8.0 * f32::EPSILON);
             let (nl, ne) = (n.dot(l), n.dot(e));
             if nl.abs() > 8.0 * f32::EPSILON && ne.abs() > 8.0 * f32::EPSILON {
-                prop_assert_eq!(side.eye_on_lit_side, (nl > 0.0) == (ne > 0.0));
+                prop_assert_eq!(side.face == Face::Lit, (nl > 0.0) == (ne > 0.0));
             }
         }
     }

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 use sheer_slab::model::{
-    Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness,
+    Albedo, Cosine, Face, IrradianceConvention, OpticalThickness,
     point_light_beam_normal_irradiance, slab_shading,
 };
 use sheer_slab::render::{
@@ -84,9 +84,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mu0 = normal.dot(to_light.normalize()) as f64;
         let signed_mu = normal.dot(to_eye.normalize()) as f64;
         let side = if signed_mu >= 0.0 {
-            LitSide::Front
+            Face::Lit
         } else {
-            LitSide::Back
+            Face::Far
         };
         let irradiance = point_light_beam_normal_irradiance(60.0, to_light.length() as f64)?;
         for convention in [

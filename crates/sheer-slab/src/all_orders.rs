@@ -19,12 +19,53 @@ use std::sync::Arc;
 
 use thiserror::Error;
 
-pub use sheer_transport::{AllOrdersTable, TableFace, TransportError};
+pub use sheer_transport::AllOrdersTable;
+pub(crate) use sheer_transport::{TableFace, TransportError};
 
 use crate::model::{
-    Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness, SlabParameterError,
-    SlabShading, shading_from_diffuse_radiance, single_scattered_radiance,
+    Albedo, Cosine, Face, IrradianceConvention, OpticalThickness, SlabParameterError, SlabShading,
+    shading_from_diffuse_radiance, single_scattered_radiance,
 };
+
+/// Which orders of scattering, named without the table that all orders need: what a scene file says.
+/// With the `serde` feature: `single` or `all-orders`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum ScatteringOrders {
+    /// Single scattering only: eqs. (4)–(5), the paper's model.
+    #[default]
+    #[cfg_attr(feature = "serde", serde(rename = "single"))]
+    Single,
+    /// All orders: eqs. (4)–(5) plus the multiply-scattered part from a precomputed table.
+    #[cfg_attr(feature = "serde", serde(rename = "all-orders"))]
+    All,
+}
+
+impl ScatteringOrders {
+    /// The user-facing name, as in a scene file: `single` or `all-orders`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Single => "single",
+            Self::All => "all-orders",
+        }
+    }
+}
+
+/// A name that is neither `single` nor `all-orders`.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("unknown scattering model {0:?}: expected single or all-orders")]
+pub struct UnknownScatteringOrders(pub String);
+
+impl std::str::FromStr for ScatteringOrders {
+    type Err = UnknownScatteringOrders;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        [Self::Single, Self::All]
+            .into_iter()
+            .find(|orders| orders.name() == name)
+            .ok_or_else(|| UnknownScatteringOrders(name.to_owned()))
+    }
+}
 
 /// Which orders of scattering the slab's diffuse radiance includes.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -37,20 +78,28 @@ pub enum Scattering {
 }
 
 impl Scattering {
-    /// The user-facing name: `single` or `all-orders`.
-    pub fn name(&self) -> &'static str {
+    /// `orders` with, for all orders, the table `all_orders_table` gives (called only then).
+    pub fn with_orders<E>(
+        orders: ScatteringOrders,
+        all_orders_table: impl FnOnce() -> Result<Arc<AllOrdersTable>, E>,
+    ) -> Result<Self, E> {
+        Ok(match orders {
+            ScatteringOrders::Single => Self::Single,
+            ScatteringOrders::All => Self::AllOrders(all_orders_table()?),
+        })
+    }
+
+    /// Which orders, without the table.
+    pub fn orders(&self) -> ScatteringOrders {
         match self {
-            Self::Single => "single",
-            Self::AllOrders(_) => "all-orders",
+            Self::Single => ScatteringOrders::Single,
+            Self::AllOrders(_) => ScatteringOrders::All,
         }
     }
 
-    /// The table, for `AllOrders`.
-    pub fn table(&self) -> Option<&Arc<AllOrdersTable>> {
-        match self {
-            Self::Single => None,
-            Self::AllOrders(table) => Some(table),
-        }
+    /// The user-facing name: `single` or `all-orders`.
+    pub fn name(&self) -> &'static str {
+        self.orders().name()
     }
 }
 
@@ -104,26 +153,26 @@ pub fn load_all_orders_table(
 /// Relative slack on the table's τ1 range admitted by the renderer: τ1 arrives there in `f32`, where the
 /// table's ends are not representable (`0.01f32 < 0.01`). Values inside the slack are evaluated at the
 /// end node; the slack is 17 `f32` ulps, far below any physical meaning.
-pub const TABLE_RANGE_SLACK: f64 = 1e-6;
+pub(crate) const TABLE_RANGE_SLACK: f64 = 1e-6;
 
 /// The table's τ1 range `(min, max)`.
-pub fn table_tau_range(table: &AllOrdersTable) -> (f64, f64) {
+pub(crate) fn table_tau_range(table: &AllOrdersTable) -> (f64, f64) {
     let spec = table.spec();
     (spec.tau_min, spec.tau_max)
 }
 
-fn face(side: LitSide) -> TableFace {
+fn face(side: Face) -> TableFace {
     match side {
-        LitSide::Front => TableFace::Reflected,
-        LitSide::Back => TableFace::Transmitted,
+        Face::Lit => TableFace::Reflected,
+        Face::Far => TableFace::Transmitted,
     }
 }
 
 /// The multiply-scattered (orders ≥ 2) radiance per unit albedo and unit irradiance normal to the beam,
 /// `L_m/Λ = Λ·μ0·e^{ln f}` (sr⁻¹), on the face the eye is on. τ1 must lie in the table's range.
-pub fn multiple_scattered_radiance_per_albedo(
+pub(crate) fn multiple_scattered_radiance_per_albedo(
     table: &AllOrdersTable,
-    side: LitSide,
+    side: Face,
     optical_thickness: OpticalThickness,
     albedo: Albedo,
     mu0: Cosine,
@@ -148,9 +197,9 @@ pub fn multiple_scattered_radiance_per_albedo(
 
 /// [`multiple_scattered_radiance_per_albedo`] for the three colour channels at once (the table's
 /// cosine and τ1 positions are shared where they can be); equal to three single calls bit for bit.
-pub fn multiple_scattered_radiance_per_albedo_rgb(
+pub(crate) fn multiple_scattered_radiance_per_albedo_rgb(
     table: &AllOrdersTable,
-    side: LitSide,
+    side: Face,
     optical_thickness: [OpticalThickness; 3],
     albedo: [Albedo; 3],
     mu0: Cosine,
@@ -177,7 +226,7 @@ pub fn multiple_scattered_radiance_per_albedo_rgb(
 /// chosen model: eq. (4) or (5), plus for `AllOrders` the interpolated multiply-scattered part.
 pub fn diffuse_radiance(
     scattering: &Scattering,
-    side: LitSide,
+    side: Face,
     optical_thickness: OpticalThickness,
     albedo: Albedo,
     mu0: Cosine,
@@ -209,7 +258,7 @@ pub fn slab_shading_with(
     albedo: Albedo,
     mu0: Cosine,
     mu: Cosine,
-    side: LitSide,
+    side: Face,
     beam_normal_irradiance: f64,
     convention: IrradianceConvention,
 ) -> Result<SlabShading, SlabParameterError> {
@@ -242,7 +291,7 @@ mod tests {
             Cosine::new("mu0", 0.6).unwrap(),
             Cosine::new("mu", 0.8).unwrap(),
         );
-        for side in [LitSide::Front, LitSide::Back] {
+        for side in [Face::Lit, Face::Far] {
             let ours = slab_shading_with(
                 &Scattering::Single,
                 tau,
@@ -282,16 +331,16 @@ mod tests {
         );
         // The sum equals sheer-transport's own all-orders sampler (eq. (4)/(5) there is a different
         // closed form of the same expression: agreement to a few ulps).
-        let ours = diffuse_radiance(&all, LitSide::Front, tau, albedo, mu0, mu).unwrap();
+        let ours = diffuse_radiance(&all, Face::Lit, tau, albedo, mu0, mu).unwrap();
         let theirs = table.reflected_radiance(2.0, 0.9, 0.6, 0.8).unwrap();
         assert!((ours - theirs).abs() <= 1e-14 * theirs, "{ours} {theirs}");
-        let ours = diffuse_radiance(&all, LitSide::Back, tau, albedo, mu0, mu).unwrap();
+        let ours = diffuse_radiance(&all, Face::Far, tau, albedo, mu0, mu).unwrap();
         let theirs = table.transmitted_radiance(2.0, 0.9, 0.6, 0.8).unwrap();
         assert!((ours - theirs).abs() <= 1e-14 * theirs, "{ours} {theirs}");
         // Λ = 0 scatters nothing in either model.
         let zero = Albedo::new(0.0).unwrap();
         assert_eq!(
-            diffuse_radiance(&all, LitSide::Back, tau, zero, mu0, mu).unwrap(),
+            diffuse_radiance(&all, Face::Far, tau, zero, mu0, mu).unwrap(),
             0.0
         );
     }
@@ -304,7 +353,7 @@ mod tests {
         for tau in [1e-3, 20.0] {
             let error = diffuse_radiance(
                 &all,
-                LitSide::Front,
+                Face::Lit,
                 OpticalThickness::new(tau).unwrap(),
                 albedo,
                 cosine,

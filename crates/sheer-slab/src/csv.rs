@@ -14,7 +14,7 @@ use thiserror::Error;
 
 use crate::all_orders::{Scattering, diffuse_radiance};
 use crate::model::{
-    Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness, SlabParameterError,
+    Albedo, Cosine, Face, IrradianceConvention, OpticalThickness, SlabParameterError,
     direct_transmission,
 };
 
@@ -120,13 +120,14 @@ pub fn evaluate_row_with(
         mu0,
         mu,
         alpha: direct_transmission(tau, cos),
-        l_plus: radiance(LitSide::Front)? * irradiance,
-        l_minus: radiance(LitSide::Back)? * irradiance,
+        l_plus: radiance(Face::Lit)? * irradiance,
+        l_minus: radiance(Face::Far)? * irradiance,
     })
 }
 
 /// Inputs `(τ1, Λ, μ0, μ)` of the table of exact values in the crate README (printed by
 /// `examples/value_table.rs`, checked against the README and against quadrature by `tests/readme_table.rs`).
+#[cfg(any(test, feature = "test-support"))]
 pub const REFERENCE_TABLE_INPUTS: [[f64; 4]; 12] = [
     [2.0, 1.0, 1.0, 1.0],
     [2.0, 1.0, 0.5, 0.5],
@@ -144,6 +145,7 @@ pub const REFERENCE_TABLE_INPUTS: [[f64; 4]; 12] = [
 
 /// One Markdown table row `| tau1 | albedo | mu0 | mu | alpha | l_plus | l_minus |`, outputs with 10
 /// significant digits.
+#[cfg(any(test, feature = "test-support"))]
 pub fn markdown_row(row: &SlabRow) -> String {
     format!(
         "| {} | {} | {} | {} | {:.9e} | {:.9e} | {:.9e} |",

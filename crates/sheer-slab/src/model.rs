@@ -19,7 +19,7 @@
 //!
 //! Integrating the single-scattering source along the view ray for a collimated beam whose irradiance on a
 //! plane *normal to the beam* is `F` reproduces eq. (4) and eq. (5) exactly with `E(0) = F`
-//! ([`crate::reference::single_scattered_radiance_by_view_ray_quadrature`]; `tests/model_numerics.rs`:
+//! (`reference::single_scattered_radiance_by_view_ray_quadrature`, `tests/model_numerics.rs`:
 //! worst relative difference 2.1e-14 over 160 cases). Eq. (6),
 //! the irradiance *on the surface*, already contains the factor μ0 = cos θ0 (it is `F·μ0`); inserting it into
 //! eqs. (4)–(5) counts the obliquity twice. The energy balance confirms it: for an optically thin slab the
@@ -45,6 +45,10 @@
 use std::f64::consts::PI;
 
 use thiserror::Error;
+
+/// Which face of the slab the eye sees ([`Face::Lit`]: eq. 4, [`Face::Far`]: eq. 5), as the lit-side
+/// rule of `sheer-normals` decides it; and that rule's error.
+pub use sheer_normals::{Face, NormalsError};
 
 /// Why a model parameter was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
@@ -72,6 +76,10 @@ pub enum SlabParameterError {
     /// Distance from a point light must be finite and strictly positive (m).
     #[error("distance {0:?} m to the light is not a finite number > 0")]
     Distance(f64),
+    /// A normal or a direction to the light or the eye has a NaN or infinite component (the lit-side
+    /// rule refuses it).
+    #[error(transparent)]
+    Geometry(#[from] NormalsError),
     /// The `all-orders` model covers only the τ1 range of its precomputed table.
     #[error(
         "optical thickness tau1 = {value:?} lies outside the all-orders table's range [{min}, {max}]"
@@ -174,6 +182,11 @@ impl Cosine {
 
 /// Which irradiance is inserted as `E(0)` in eqs. (4)–(5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum IrradianceConvention {
     /// `E(0)` = irradiance on a plane normal to the beam, `Φ/(4πr²)` for a point light. Physically right:
     /// this is what eqs. (4)–(5) are derived for (see the module docs).
@@ -291,15 +304,6 @@ fn one_minus_exp_neg_over(d: f64) -> f64 {
     if d == 0.0 { 1.0 } else { -(-d).exp_m1() / d }
 }
 
-/// Which face of the slab the eye sees.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LitSide {
-    /// The eye is on the lit side (front-lit surface): eq. (7) with L+ of eq. (4).
-    Front,
-    /// The eye is on the far side (back-lit surface): eq. (8) with L− of eq. (5).
-    Back,
-}
-
 /// What the shader computes for one sample: the source radiance and the blend factor of eq. (9).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlabShading {
@@ -318,16 +322,16 @@ impl SlabShading {
 
 /// Eq. (4) on the lit face (`Front`), eq. (5) on the far face (`Back`): the single-scattered radiance on
 /// the face the eye is on, per unit irradiance normal to the beam (sr⁻¹).
-pub fn single_scattered_radiance(
-    side: LitSide,
+pub(crate) fn single_scattered_radiance(
+    side: Face,
     optical_thickness: OpticalThickness,
     albedo: Albedo,
     mu0: Cosine,
     mu: Cosine,
 ) -> f64 {
     match side {
-        LitSide::Front => single_scattered_reflected_radiance(optical_thickness, albedo, mu0, mu),
-        LitSide::Back => single_scattered_transmitted_radiance(optical_thickness, albedo, mu0, mu),
+        Face::Lit => single_scattered_reflected_radiance(optical_thickness, albedo, mu0, mu),
+        Face::Far => single_scattered_transmitted_radiance(optical_thickness, albedo, mu0, mu),
     }
 }
 
@@ -337,7 +341,7 @@ pub fn slab_shading(
     albedo: Albedo,
     mu0: Cosine,
     mu: Cosine,
-    side: LitSide,
+    side: Face,
     beam_normal_irradiance: f64,
     convention: IrradianceConvention,
 ) -> Result<SlabShading, SlabParameterError> {

@@ -65,7 +65,7 @@ pub enum SkyError {
 /// Real spherical harmonics of bands 0–2 at the unit vector `m` (x, y, z), in the order
 /// Y00, Y1−1 (y), Y10 (z), Y11 (x), Y2−2 (xy), Y2−1 (yz), Y20, Y21 (xz), Y22 (Ramamoorthi & Hanrahan
 /// 2001, eq. 3).
-pub fn spherical_harmonics(m: DVec3) -> [f64; 9] {
+pub(crate) fn spherical_harmonics(m: DVec3) -> [f64; 9] {
     let (x, y, z) = (m.x, m.y, m.z);
     [
         0.282_094_791_773_878_14,
@@ -162,7 +162,7 @@ impl DiffuseEnvironment {
     /// The uniform radiance `L_in(m) = E(m)/π` (W/(m²·sr)) that lights a face of outward unit normal
     /// `m`, per channel. Three bands of an image can dip below zero where the image is dark beside a
     /// bright sun; no light is negative, so such a value is 0.
-    pub fn radiance_on_face(&self, m: DVec3) -> [f64; 3] {
+    pub(crate) fn radiance_on_face(&self, m: DVec3) -> [f64; 3] {
         let basis = spherical_harmonics(m);
         [0, 1, 2].map(|c| {
             let sum: f64 = (0..9).map(|k| self.coefficients[k][c] * basis[k]).sum();
@@ -171,7 +171,7 @@ impl DiffuseEnvironment {
     }
 
     /// The coefficients of `E/π` as the shader reads them: nine `vec4`s, rgb per coefficient.
-    pub fn shader_coefficients(&self) -> [[f32; 4]; 9] {
+    pub(crate) fn shader_coefficients(&self) -> [[f32; 4]; 9] {
         self.coefficients
             .map(|[r, g, b]| [r as f32, g as f32, b as f32, 0.0])
     }
@@ -193,7 +193,7 @@ const ALBEDO_FLOOR: f64 = 1e-8;
 /// `(R_d/Λ, T_d/Λ)` per channel at cosine `mu` (sr⁰: dimensionless per unit albedo), the table's
 /// interpolated all-orders response to uniform diffuse incidence. `tau` and `albedo` per channel must
 /// lie in the table's range (validated by the renderer's `ShadingParams::validate`).
-pub fn diffuse_response_per_albedo(
+pub(crate) fn diffuse_response_per_albedo(
     table: &DiffuseTable,
     tau: [f64; 3],
     albedo: [f64; 3],
@@ -217,7 +217,7 @@ pub fn diffuse_response_per_albedo(
 /// The sky's radiance toward the eye per unit albedo (W/(m²·sr)), per channel: `L_in(m)·R_d/Λ +
 /// L_in(−m)·T_d/Λ`, with `m` the normal of the face the eye looks at and `mu` = |n·e| (floored and capped
 /// by the caller as the point light's cosines are). A zero normal gives no sky light.
-pub fn sky_radiance_per_albedo(
+pub(crate) fn sky_radiance_per_albedo(
     sky: &SkyLight,
     normal: DVec3,
     to_eye: DVec3,

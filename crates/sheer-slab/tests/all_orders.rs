@@ -9,10 +9,10 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use sheer_slab::all_orders::{
-    AllOrdersTable, Scattering, TableFace, TableLoadError, default_table_path, diffuse_radiance,
+    AllOrdersTable, Scattering, TableLoadError, default_table_path, diffuse_radiance,
     load_all_orders_table,
 };
-use sheer_slab::model::{Albedo, Cosine, LitSide, OpticalThickness};
+use sheer_slab::model::{Albedo, Cosine, Face, OpticalThickness};
 use sheer_slab::render::{
     HeadlessRenderer, RenderError, ShadingError, ShadingParams, Texture2d, gpu_tests_may_be_skipped,
 };
@@ -141,7 +141,10 @@ fn wgsl_lookup_matches_the_cpu_sampler() {
         // f32 τ1 at the table's ends may fall outside by rounding; the renderer's CPU path clamps the
         // same way.
         let tau = tau.clamp(min, max);
-        for (face, column) in [(TableFace::Reflected, 0), (TableFace::Transmitted, 1)] {
+        for (face, column) in [
+            (sheer_transport::TableFace::Reflected, 0),
+            (sheer_transport::TableFace::Transmitted, 1),
+        ] {
             let log_value = table
                 .log_reduced_multiple_radiance(face, tau, albedo, mu0, mu)
                 .unwrap();
@@ -211,10 +214,10 @@ fn cpu_all_orders_matches_the_solver_within_the_tables_stated_error() {
                     };
                     let exact = solution.reflected_radiance(mu).unwrap();
                     worst_reflected =
-                        worst_reflected.max(((ours(LitSide::Front) - exact) / exact).abs());
+                        worst_reflected.max(((ours(Face::Lit) - exact) / exact).abs());
                     let exact = solution.transmitted_radiance(mu).unwrap();
                     worst_transmitted =
-                        worst_transmitted.max(((ours(LitSide::Back) - exact) / exact).abs());
+                        worst_transmitted.max(((ours(Face::Far) - exact) / exact).abs());
                     compared += 1;
                 }
             }
@@ -233,7 +236,7 @@ fn cpu_all_orders_matches_the_solver_within_the_tables_stated_error() {
     // The comparison has power: single scattering alone misses by far more at these points.
     let single = diffuse_radiance(
         &Scattering::Single,
-        LitSide::Front,
+        Face::Lit,
         OpticalThickness::new(2.0).unwrap(),
         Albedo::new(0.95).unwrap(),
         Cosine::new("mu0", 0.6).unwrap(),

@@ -12,13 +12,13 @@ use sheer_slab::all_orders::{
     Scattering, default_table_path, load_all_orders_table, slab_shading_with,
 };
 use sheer_slab::model::{
-    Albedo, Cosine, IrradianceConvention, LitSide, OpticalThickness,
+    Albedo, Cosine, Face, IrradianceConvention, OpticalThickness,
     point_light_beam_normal_irradiance, slab_shading,
 };
 use sheer_slab::render::{
     AllOrdersSampling, Background, Camera, EvaluationPath, HeadlessRenderer, LinearImage,
     RenderError, ShadingParams, SlabMesh, TargetFormat, Texture2d, gpu_tests_may_be_skipped,
-    lit_side_cosines, slab_values_at,
+    slab_values_at,
 };
 
 const WIDTH: u32 = 96;
@@ -107,7 +107,7 @@ fn shading_geometry(
     normal: DVec3,
     eye: DVec3,
     light: DVec3,
-) -> (f64, f64, LitSide, f64) {
+) -> (f64, f64, Face, f64) {
     let to_light = light - point;
     let mut n = normal.normalize();
     if n.dot(to_light) < 0.0 {
@@ -116,9 +116,9 @@ fn shading_geometry(
     let mu0 = n.dot(to_light.normalize());
     let signed_mu = n.dot((eye - point).normalize());
     let side = if signed_mu >= 0.0 {
-        LitSide::Front
+        Face::Lit
     } else {
-        LitSide::Back
+        Face::Far
     };
     (mu0, signed_mu.abs(), side, to_light.length())
 }
@@ -1213,7 +1213,9 @@ fn assert_table_per_vertex_interpolates(
         let one = slab_values_at(point, sheet.normal, tau, albedo, eye, &single)
             .unwrap()
             .0;
-        let (mu0, _, _) = lit_side_cosines(sheet.normal, light - point, eye - point);
+        let mu0 = sheer_normals::lit_side_cosines(sheet.normal, light - point, eye - point)
+            .unwrap()
+            .mu0;
         let irradiance = point_light_beam_normal_irradiance(
             f64::from(shading.light_flux),
             light.distance(point),

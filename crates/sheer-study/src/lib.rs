@@ -27,12 +27,12 @@
 pub mod ablation;
 pub mod chart;
 pub mod choose;
-pub mod cli;
 pub mod coverage;
 pub mod cpu;
 mod error;
 pub mod metrics;
 pub mod monitor;
+pub mod outputs;
 pub mod reference;
 pub mod run;
 pub mod scene;
@@ -44,7 +44,6 @@ pub mod work_precision;
 
 pub use ablation::{AblationRow, CostRatio, CostTiming, ablation};
 pub use choose::{Budget, Choice, ChoiceFile, DEFAULT_COVERAGE_BUDGET, choose};
-pub use cli::{StudyArgs, StudyCommand, run};
 pub use coverage::{CoverageWindow, MeanCoverage, coverage_difference};
 pub use error::StudyError;
 pub use metrics::{ErrorMetrics, position_errors};

@@ -1,10 +1,9 @@
-//! Progress and interruption: an `indicatif` bar plus a cancel flag that Ctrl-C sets.
+//! Progress and interruption: an `indicatif` bar plus a cancel flag that the program's Ctrl-C handler sets.
 //!
 //! Every long loop of the study calls [`Monitor::check`] between frames, so Ctrl-C stops a sweep within
 //! one frame of simulated time and the study returns [`StudyError::Interrupted`].
 
 use std::sync::Arc;
-use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,21 +30,9 @@ impl Monitor {
         }
     }
 
-    /// A bar on standard error and a cancel flag set by Ctrl-C (SIGINT). The handler is installed once
-    /// per process; later monitors share its flag.
-    pub fn interactive() -> Monitor {
-        static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
-        let cancel = FLAG
-            .get_or_init(|| {
-                let flag = Arc::new(AtomicBool::new(false));
-                let handler_flag = Arc::clone(&flag);
-                // If another part of the process already owns SIGINT, Ctrl-C keeps its default
-                // behaviour (ending the process), which still interrupts the study.
-                let _ = ctrlc::set_handler(move || handler_flag.store(true, Ordering::SeqCst));
-                flag
-            })
-            .clone();
-        cancel.store(false, Ordering::SeqCst);
+    /// A bar on standard error and the caller's cancel flag (a program sets it from its Ctrl-C
+    /// handler; the study stops within one frame once it is set).
+    pub fn with_progress_bar(cancel: Arc<AtomicBool>) -> Monitor {
         let bar = ProgressBar::new(0);
         bar.set_style(
             ProgressStyle::with_template(
@@ -59,11 +46,6 @@ impl Monitor {
             cancel,
             log_lines,
         }
-    }
-
-    /// The cancel flag, for callers that want to set it themselves.
-    pub fn cancel_flag(&self) -> Arc<AtomicBool> {
-        Arc::clone(&self.cancel)
     }
 
     /// `Err(Interrupted)` once the cancel flag is set.

@@ -262,7 +262,7 @@ fn quick_study_writes_every_output() {
         // The charts need a TrueType font (fonts-dejavu-core); without one the study reports a typed
         // error, which this checks instead of the files.
         let out = std::env::temp_dir().join("sheer-study-no-font");
-        let result = sheer_study::cli::write_all(
+        let result = sheer_study::outputs::write_all(
             &StudyConfig::quick(),
             &Budget::default(),
             &out,
@@ -273,7 +273,7 @@ fn quick_study_writes_every_output() {
     }
     let out = std::env::temp_dir().join(format!("sheer-study-quick-{}", std::process::id()));
     // A budget every quick setting that does not diverge meets, so a choice file is written.
-    sheer_study::cli::write_all(
+    sheer_study::outputs::write_all(
         &StudyConfig::quick(),
         &Budget::Coverage {
             max_difference: 10.0,
@@ -298,7 +298,7 @@ fn quick_study_writes_every_output() {
         assert!(size > 100, "{} missing or empty", path.display());
     }
     // The seed study (not part of `all`): one row per seed and setting, a summary row per setting.
-    sheer_study::cli::write_seeds(&StudyConfig::quick(), 2, &out, &Monitor::hidden()).unwrap();
+    sheer_study::outputs::write_seeds(&StudyConfig::quick(), 2, &out, &Monitor::hidden()).unwrap();
     let seeds = std::fs::read_to_string(out.join("seeds.csv")).unwrap();
     assert_eq!(seeds.lines().count(), 1 + 2 * 11);
     assert!(seeds.lines().skip(1).all(|l| !l.contains(",,")), "{seeds}");
@@ -306,7 +306,7 @@ fn quick_study_writes_every_output() {
     assert!(seeds_md.contains("| full model | small_steps_xpbd ×40 | 2 |"));
     assert!(seeds_md.contains("held ≤ 2 ms (every 4 sub-steps), the default flag"));
     assert!(matches!(
-        sheer_study::cli::write_seeds(&StudyConfig::quick(), 0, &out, &Monitor::hidden()),
+        sheer_study::outputs::write_seeds(&StudyConfig::quick(), 0, &out, &Monitor::hidden()),
         Err(sheer_study::StudyError::InvalidInput { .. })
     ));
     let csv = std::fs::read_to_string(out.join("work-precision.csv")).unwrap();

@@ -1,18 +1,19 @@
 //! CPU-side work of the renderer: the per-vertex "on the CPU" evaluation path (rayon, `f64` model of
-//! [`crate::model`], and for the all-orders model the `f64` table sampler of [`crate::all_orders`]), the
-//! lit-side rule it shares with `shaders/lit_side.wgsl`, back-to-front triangle sorting, and half-float
-//! texture quantisation shared by upload and CPU sampling.
+//! [`crate::model`], and for the all-orders model the `f64` table sampler of [`crate::all_orders`];
+//! the lit-side rule is `sheer-normals`' in `f64`, the shaders' is its WGSL twin), back-to-front
+//! triangle sorting, and half-float texture quantisation shared by upload and CPU sampling.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
+use sheer_normals::{LitSide, lit_side_cosines};
 
 use super::scene::{ShadingParams, SlabMesh, Texture2d};
 use super::shadow::{LightTransmission, ShadowCasters};
 use super::slab_renderer::OpaqueMesh;
 use crate::all_orders::{Scattering, multiple_scattered_radiance_per_albedo_rgb, table_tau_range};
 use crate::model::{
-    Albedo, Cosine, LitSide, OpticalThickness, SlabParameterError, direct_transmission,
+    Albedo, Cosine, Face, OpticalThickness, SlabParameterError, direct_transmission,
     single_scattered_reflected_radiance, single_scattered_transmitted_radiance,
 };
 use crate::sky::{diffuse_response_per_albedo, sky_radiance_per_albedo};
@@ -31,28 +32,12 @@ pub struct VertexSlab {
     pub transmittance: [f32; 3],
 }
 
-/// The lit-side rule (Frisvad et al. 2005 §4; identical to `shaders/lit_side.wgsl`): turn the normal toward
-/// the light, μ0 = n·l, μ = |n·e|, eye on the lit side iff n·e ≥ 0. Returns `(μ0, μ, eye_on_lit_side)`;
-/// a zero normal gives (0, 0, true).
-pub fn lit_side_cosines(normal: DVec3, to_light: DVec3, to_eye: DVec3) -> (f64, f64, bool) {
-    let light = to_light.normalize_or_zero();
-    let eye = to_eye.normalize_or_zero();
-    let mut n = normal.normalize_or_zero();
-    if n == DVec3::ZERO {
-        return (0.0, 0.0, true);
-    }
-    if n.dot(light) < 0.0 {
-        n = -n;
-    }
-    let signed_mu = n.dot(eye);
-    (n.dot(light).abs(), signed_mu.abs(), signed_mu >= 0.0)
-}
-
 /// The model at one surface point: L/Λ (W/(m²·sr)) and α per channel, with the same geometric guards as
 /// the shader (μ0 ≤ 0: no light; cosines floored at [`COSINE_FLOOR`] and capped at 1 against rounding).
 /// `tau` per channel must be > 0 and finite (validated by [`ShadingParams::validate`]). `albedo` (Λ per
 /// channel) is used only by the all-orders model, whose multiple part is not linear in Λ; single
 /// scattering is returned for Λ = 1, as the GPU paths interpolate it.
+#[cfg(any(test, feature = "test-support"))]
 pub fn slab_values_at(
     position: DVec3,
     normal: DVec3,
@@ -85,11 +70,10 @@ pub fn slab_values_lit_by(
     light: &LightTransmission,
 ) -> Result<([f64; 3], [f64; 3]), SlabParameterError> {
     let to_light = params.light_position.as_dvec3() - position;
-    let (mu0, mu, lit) = lit_side_cosines(normal, to_light, eye - position);
+    let LitSide { mu0, mu, face } = lit_side_cosines(normal, to_light, eye - position)?;
     let unit = Albedo::new(1.0)?;
     let cos_mu = Cosine::new("mu", mu.clamp(COSINE_FLOOR, 1.0))?;
     let cos_mu0 = Cosine::new("mu0", mu0.clamp(COSINE_FLOOR, 1.0))?;
-    let side = if lit { LitSide::Front } else { LitSide::Back };
     let optical_thickness = [
         OpticalThickness::new(tau[0])?,
         OpticalThickness::new(tau[1])?,
@@ -105,7 +89,7 @@ pub fn slab_values_lit_by(
             let clamp_albedo = |c: usize| Albedo::new(albedo[c].clamp(0.0, 1.0));
             multiple_scattered_radiance_per_albedo_rgb(
                 table,
-                side,
+                face,
                 [clamp_tau(0)?, clamp_tau(1)?, clamp_tau(2)?],
                 [clamp_albedo(0)?, clamp_albedo(1)?, clamp_albedo(2)?],
                 cos_mu0,
@@ -139,7 +123,7 @@ pub fn slab_values_lit_by(
             f64::from(params.light_flux) / (4.0 * std::f64::consts::PI * to_light.length_squared()),
             cos_mu0,
         );
-        let single = if lit {
+        let single = if face == Face::Lit {
             single_scattered_reflected_radiance(optical_thickness[channel], unit, cos_mu0, cos_mu)
         } else {
             single_scattered_transmitted_radiance(optical_thickness[channel], unit, cos_mu0, cos_mu)
@@ -162,7 +146,11 @@ pub fn slab_values_lit_by(
         let normal_irradiance =
             f64::from(params.light_flux) / (4.0 * std::f64::consts::PI * to_light.length_squared());
         for c in 0..3 {
-            let response = if lit { reflected[c] } else { transmitted[c] };
+            let response = if face == Face::Lit {
+                reflected[c]
+            } else {
+                transmitted[c]
+            };
             radiance[c] += response * light.diffuse[c] * (cos_mu0.get() * normal_irradiance);
         }
     }
@@ -378,11 +366,12 @@ mod tests {
     #[test]
     fn lit_side_rule() {
         // Normal pointing away from the light is flipped; eye behind → far side.
-        let (mu0, mu, lit) = lit_side_cosines(-DVec3::Z, DVec3::Z, -DVec3::Z * 2.0);
-        assert_eq!((mu0, mu, lit), (1.0, 1.0, false));
+        let side = lit_side_cosines(-DVec3::Z, DVec3::Z, -DVec3::Z * 2.0).unwrap();
+        assert_eq!((side.mu0, side.mu, side.face), (1.0, 1.0, Face::Far));
+        let zero_normal = lit_side_cosines(DVec3::ZERO, DVec3::Z, DVec3::Z).unwrap();
         assert_eq!(
-            lit_side_cosines(DVec3::ZERO, DVec3::Z, DVec3::Z),
-            (0.0, 0.0, true)
+            (zero_normal.mu0, zero_normal.mu, zero_normal.face),
+            (0.0, 0.0, Face::Lit)
         );
     }
 

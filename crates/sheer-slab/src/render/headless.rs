@@ -12,10 +12,9 @@ use super::slab_renderer::{
     SlabDraw, SlabFrame, SlabRenderer, SlabRendererOptions, SlabTarget, TargetOutput,
 };
 use super::{
-    Background, Camera, EvaluationPath, LIT_SIDE, LinearImage, MODEL_CHECK, OUTPUT_SINGLE,
-    RenderError, SHADER_BODY, SHADOW, ShadingParams, SlabMesh, TargetFormat,
-    extend_with_f16_texels, extend_with_f32_texels, first_overflowed_channel, target_wgpu_format,
-    validated,
+    Background, Camera, EvaluationPath, LIT_SIDE, LinearImage, OUTPUT_SINGLE, RenderError,
+    SHADER_BODY, SHADOW, ShadingParams, SlabMesh, TargetFormat, extend_with_f16_texels,
+    extend_with_f32_texels, first_overflowed_channel, target_wgpu_format, validated,
 };
 use crate::all_orders::AllOrdersTable;
 
@@ -426,6 +425,71 @@ impl HeadlessRenderer {
         })
     }
 
+    /// Maps `buffer`, hands its bytes to `read` in place (no copy of the whole buffer first) and unmaps
+    /// it.
+    fn map_and_read<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, RenderError> {
+        let slice = buffer.slice(..);
+        let status = Arc::new(Mutex::new(None));
+        let status_sink = Arc::clone(&status);
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            if let Ok(mut slot) = status_sink.lock() {
+                *slot = Some(result);
+            }
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|error| RenderError::Gpu(error.to_string()))?;
+        let mapped = status.lock().ok().and_then(|mut slot| slot.take());
+        match mapped {
+            Some(Ok(())) => {}
+            Some(Err(error)) => return Err(RenderError::Gpu(format!("mapping a buffer: {error}"))),
+            None => return Err(RenderError::Gpu("buffer never mapped".into())),
+        }
+        let value = {
+            let bytes = slice
+                .get_mapped_range()
+                .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?;
+            read(&bytes)
+        };
+        buffer.unmap();
+        self.take_uncaptured()?;
+        Ok(value)
+    }
+
+    fn take_uncaptured(&self) -> Result<(), RenderError> {
+        let mut errors = self
+            .uncaptured
+            .lock()
+            .map_err(|_| RenderError::Gpu("error log poisoned".into()))?;
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            let message = errors.join("; ");
+            errors.clear();
+            Err(RenderError::Gpu(message))
+        }
+    }
+}
+
+impl std::fmt::Debug for HeadlessRenderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HeadlessRenderer")
+            .field("adapter", &self.adapter_description)
+            .field("size", &(self.width, self.height))
+            .field("target_format", &self.target_format)
+            .field("renderer", &self.renderer)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The shader checks: the WGSL model evaluated on the GPU for samples, for the tests that compare it
+/// with the `f64` model (behind the `test-support` feature).
+#[cfg(any(test, feature = "test-support"))]
+impl HeadlessRenderer {
     /// Evaluates the shader's model function (`slab_shapes` in `shaders/thin_slab.wgsl`) on the GPU for
     /// samples `(τ1, μ0, μ)` and returns `(eq. 4, eq. 5, α)` per sample, the radiances per unit
     /// irradiance and without the factor Λ/(4π): for checking the WGSL model against [`crate::model`].
@@ -467,7 +531,10 @@ impl HeadlessRenderer {
         if inputs.is_empty() {
             return Ok(Vec::new());
         }
-        let source = format!("{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{SHADOW}\n{MODEL_CHECK}");
+        let source = format!(
+            "{OUTPUT_SINGLE}\n{LIT_SIDE}\n{SHADER_BODY}\n{SHADOW}\n{}",
+            super::MODEL_CHECK
+        );
         // With the frame's group 0: the same layout as the per-vertex all-orders pass (group 1 one
         // storage buffer in, one out); without: derived from the entry point.
         let layout = frame_bindings.map(|_| &self.renderer.compute_io_pipeline_layout);
@@ -551,66 +618,6 @@ impl HeadlessRenderer {
         encoder.copy_buffer_to_buffer(&output_buffer, 0, &readback, 0, size);
         self.queue.submit([encoder.finish()]);
         self.map_and_read(&readback, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>)
-    }
-
-    /// Maps `buffer`, hands its bytes to `read` in place (no copy of the whole buffer first) and unmaps
-    /// it.
-    fn map_and_read<T>(
-        &self,
-        buffer: &wgpu::Buffer,
-        read: impl FnOnce(&[u8]) -> T,
-    ) -> Result<T, RenderError> {
-        let slice = buffer.slice(..);
-        let status = Arc::new(Mutex::new(None));
-        let status_sink = Arc::clone(&status);
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            if let Ok(mut slot) = status_sink.lock() {
-                *slot = Some(result);
-            }
-        });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|error| RenderError::Gpu(error.to_string()))?;
-        let mapped = status.lock().ok().and_then(|mut slot| slot.take());
-        match mapped {
-            Some(Ok(())) => {}
-            Some(Err(error)) => return Err(RenderError::Gpu(format!("mapping a buffer: {error}"))),
-            None => return Err(RenderError::Gpu("buffer never mapped".into())),
-        }
-        let value = {
-            let bytes = slice
-                .get_mapped_range()
-                .map_err(|error| RenderError::Gpu(format!("mapped range: {error}")))?;
-            read(&bytes)
-        };
-        buffer.unmap();
-        self.take_uncaptured()?;
-        Ok(value)
-    }
-
-    fn take_uncaptured(&self) -> Result<(), RenderError> {
-        let mut errors = self
-            .uncaptured
-            .lock()
-            .map_err(|_| RenderError::Gpu("error log poisoned".into()))?;
-        if errors.is_empty() {
-            Ok(())
-        } else {
-            let message = errors.join("; ");
-            errors.clear();
-            Err(RenderError::Gpu(message))
-        }
-    }
-}
-
-impl std::fmt::Debug for HeadlessRenderer {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("HeadlessRenderer")
-            .field("adapter", &self.adapter_description)
-            .field("size", &(self.width, self.height))
-            .field("target_format", &self.target_format)
-            .field("renderer", &self.renderer)
-            .finish_non_exhaustive()
     }
 }
 

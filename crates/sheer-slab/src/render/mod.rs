@@ -29,24 +29,26 @@ mod slab_renderer;
 
 use thiserror::Error;
 
-pub use cpu::{
-    COSINE_FLOOR, VertexSlab, albedo_at, f16_bits_to_f32, f32_to_f16_bits, lit_side_cosines,
-    optical_thickness_at, per_vertex_slab_values, quantize_to_half, sample_bilinear,
-    sample_bilinear_red, slab_values_at, slab_values_lit_by, sort_back_to_front,
-};
 pub use headless::{GpuTimes, HeadlessRenderer};
 pub use scene::{
     AllOrdersSampling, Background, Camera, CameraError, LinearImage, MeshError, ShadingError,
     ShadingParams, SlabMesh, Texture2d, linear_to_srgb, linear_to_srgb8, save_image_file,
     srgb8_to_linear, write_file_atomically,
 };
-pub use shadow::{
-    DEFAULT_SHADOW_RESOLUTION, LightTransmission, LightView, MAX_HALF_ANGLE_DEGREES,
-    SHADOW_DISTANCE_BIAS, SHADOW_LAYERS, SHADOW_SLOPE_TEXELS, ShadowCasters, Shadows,
-};
+pub use shadow::{DEFAULT_SHADOW_RESOLUTION, Shadows};
+
 pub use slab_renderer::{
     LightMarker, OpaqueMesh, SlabDraw, SlabFrame, SlabRenderer, SlabRendererOptions, SlabTarget,
     TargetOutput,
+};
+/// The CPU references the tests check the GPU against (the `f64` model at a point, with and without
+/// the light's transmission through the layers in front; the texture samplers the shaders mirror; the
+/// shadow ray caster) and the GPU-test switch: for this crate's and the workspace's tests, behind the
+/// `test-support` feature.
+#[cfg(feature = "test-support")]
+pub use {
+    cpu::{albedo_at, f16_bits_to_f32, optical_thickness_at, slab_values_at, slab_values_lit_by},
+    shadow::{LightTransmission, ShadowCasters},
 };
 
 use crate::model::SlabParameterError;
@@ -55,6 +57,7 @@ const SHADER_BODY: &str = include_str!("../../../../shaders/thin_slab.wgsl");
 const LIT_SIDE: &str = include_str!("../../../../shaders/lit_side.wgsl");
 const OUTPUT_SINGLE: &str = include_str!("../../../../shaders/slab_output_single.wgsl");
 const OUTPUT_DUAL: &str = include_str!("../../../../shaders/slab_output_dual.wgsl");
+#[cfg(any(test, feature = "test-support"))]
 const MODEL_CHECK: &str = include_str!("../../../../shaders/slab_model_check.wgsl");
 const MULTIPLE_AT_VERTEX: &str = include_str!("../../../../shaders/multiple_at_vertex.wgsl");
 const SHADOW: &str = include_str!("../../../../shaders/shadow.wgsl");
@@ -75,15 +78,25 @@ fn validated<T>(
 }
 
 /// Where the model is evaluated.
+/// With the `serde` feature the thin-slab paths are named `fragment`, `vertex` and `cpu`; the baseline
+/// is a different model, not a path, so a file cannot name it here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum EvaluationPath {
     /// Eqs. (4)–(9) in the fragment shader (the paper's 300 fps path).
+    #[cfg_attr(feature = "serde", serde(rename = "fragment"))]
     PerFragment,
     /// In the vertex shader, interpolated (480 fps in the paper).
+    #[cfg_attr(feature = "serde", serde(rename = "vertex"))]
     PerVertex,
     /// Per vertex on the CPU with rayon, uploaded every frame (190 fps in the paper).
     Cpu,
     /// Traditional: diffuse BRDF, constant α, back-lit side black.
+    #[cfg_attr(feature = "serde", serde(skip))]
     Baseline,
 }
 
@@ -314,12 +327,14 @@ fn first_overflowed_channel(pixels: &[[f32; 4]], format: TargetFormat) -> Option
 }
 
 /// Whether GPU tests may be skipped: `SHEER_SKIP_GPU_TESTS=1`. Without it, a missing adapter fails them.
+#[cfg(any(test, feature = "test-support"))]
 pub fn gpu_tests_may_be_skipped() -> bool {
     std::env::var("SHEER_SKIP_GPU_TESTS").is_ok_and(|v| v == "1")
 }
 
 #[cfg(test)]
 mod tests {
+    use super::cpu::{f32_to_f16_bits, quantize_to_half};
     use super::*;
 
     /// A row read back as a cast and texel by texel (the fallback for an unaligned mapping) gives the

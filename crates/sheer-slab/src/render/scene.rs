@@ -513,16 +513,19 @@ pub struct ShadingParams {
 /// Where [`EvaluationPath::PerFragment`](super::EvaluationPath::PerFragment) looks the all-orders table
 /// up. Single scattering (eqs. 4–5), α, the irradiance, μ0 and Λ are per fragment either way.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum AllOrdersSampling {
     /// In every fragment (twelve texel loads): exact to the table everywhere; on lavapipe about 1.8×
     /// the frame time of single scattering.
     #[default]
+    #[cfg_attr(feature = "serde", serde(rename = "fragment"))]
     PerFragment,
     /// Once per mesh vertex per frame (a compute pass), for both faces; the table's reduced value
     /// f = L_m/(Λ²μ0) is interpolated and each fragment picks its face and multiplies by its own
     /// Λ²·μ0·E. About 1.1× single scattering; errs where f is not linear over a triangle: at Λ edges of
     /// the albedo texture and along folds where μ or μ0 → 0 (measured in the workspace's
     /// tests/render.rs and the README).
+    #[cfg_attr(feature = "serde", serde(rename = "vertex"))]
     PerVertex,
 }
 
@@ -679,8 +682,8 @@ impl ShadingParams {
         // Rounding to half floats keeps order, so the extreme texels give the extreme half floats.
         let (low, high) = match &self.thickness_texture {
             Some(texture) => (
-                f64::from(crate::render::quantize_to_half(texture.channel_min[0])),
-                f64::from(crate::render::quantize_to_half(texture.channel_max[0])),
+                f64::from(super::cpu::quantize_to_half(texture.channel_min[0])),
+                f64::from(super::cpu::quantize_to_half(texture.channel_max[0])),
             ),
             None => (1.0, 1.0),
         };
@@ -1005,7 +1008,7 @@ mod tests {
             let range = (table_min, table_min * table_span);
             let (low, high) = match &params.thickness_texture {
                 Some(texture) => texture.texels.iter().fold((f64::MAX, f64::MIN), |(lo, hi), t| {
-                    let v = f64::from(crate::render::quantize_to_half(t[0]));
+                    let v = f64::from(crate::render::cpu::quantize_to_half(t[0]));
                     (lo.min(v), hi.max(v))
                 }),
                 None => (1.0, 1.0),

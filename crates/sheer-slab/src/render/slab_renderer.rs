@@ -19,12 +19,12 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::cpu::{VertexSlab, f32_to_f16_bits, per_vertex_slab_values, sort_back_to_front};
 use super::shadow::{LightView, SHADOW_DISTANCE_BIAS, SHADOW_LAYERS, SHADOW_SLOPE_TEXELS};
 use super::{
     AllOrdersSampling, Background, Camera, EvaluationPath, LIT_SIDE, MULTIPLE_AT_VERTEX,
     OUTPUT_DUAL, OUTPUT_SINGLE, RenderError, SHADER_BODY, SHADOW, ShadingError, ShadingParams,
-    SlabMesh, Texture2d, VertexSlab, f32_to_f16_bits, per_vertex_slab_values, sort_back_to_front,
-    validated,
+    SlabMesh, Texture2d, validated,
 };
 use crate::all_orders::{AllOrdersTable, Scattering, TableFace};
 use crate::model::IrradianceConvention;

@@ -1,19 +1,50 @@
-//! `sheer bench memory`: how fast this machine's memory feeds one core and several, and how fast a core
+//! How fast this machine's memory feeds one core and several, and how fast a core
 //! reads what another core has just written, measured in one run. A large cloth's step waits on memory
 //! for part of its time, and no second thread makes that part faster than the second row here makes
 //! memory: these figures bound the two-thread speed-up of `sheer bench sim` on large grids
 //! (`crates/sheer-cloth/README.md`, "Against the target"). Sizes are in MiB (2²⁰ bytes), rates in GB/s
 //! (10⁹ bytes a second).
+//!
+//! `cargo run -p sheer-cloth --release --example memory -- [--csv] [--threads 1,2] [--seconds S]`
 
 use std::fmt::Write as _;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use clap::Args;
+use clap::Parser;
 
-use crate::bench_sim::check_seconds;
-use crate::{CliError, outln};
+/// A one-line error for the command line.
+#[derive(Debug)]
+struct CliError(String);
+
+impl CliError {
+    fn new(message: impl Into<String>) -> CliError {
+        CliError(message.into())
+    }
+}
+
+/// The longest measuring time a case may ask for, seconds.
+const MAX_SECONDS: f64 = 3600.0;
+
+fn check_seconds(seconds: f64) -> Result<(), CliError> {
+    if seconds.is_finite() && (0.0..=MAX_SECONDS).contains(&seconds) {
+        Ok(())
+    } else {
+        Err(CliError::new(format!(
+            "--seconds must lie in [0, {MAX_SECONDS}], got {seconds:?}"
+        )))
+    }
+}
+
+/// A line on standard output; a closed pipe is an error, not a panic.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)
+            .map_err(|e| CliError::new(format!("cannot write to standard output: {e}")))
+    }};
+}
 
 /// The most MiB the run may allocate in all (every streaming thread's buffer, or the hand-over's two):
 /// beyond it a typo would take the machine's memory.
@@ -33,28 +64,29 @@ const HANDOVER_ROUNDS: usize = 24;
 /// A value of the hand-over's turn counter that tells the other thread to stop (its partner panicked).
 const STOP: usize = usize::MAX;
 
-#[derive(Debug, Args)]
-pub struct BenchMemoryArgs {
+/// Memory bandwidth of one core and several, and the hand-over between two cores.
+#[derive(Debug, Parser)]
+struct BenchMemoryArgs {
     /// MiB each thread streams in the read and read-write cases, in [1, 4096], with all the threads
     /// together at most 4096: well beyond the last-level cache, so that they measure memory. Default:
     /// 256, or less where that many threads would pass 4096.
     #[arg(long, allow_negative_numbers = true)]
-    pub mebibytes: Option<i64>,
+    mebibytes: Option<i64>,
     /// MiB of the hand-over case's buffer, in [1, 3968]: within the last-level cache, so that reading
     /// it after a write measures where the written data is (the build machine's two cores report
     /// 32 MiB; 6 is about what a thread's wavefront on a 1 024-column cloth keeps in flight).
     #[arg(long, default_value_t = 6, allow_negative_numbers = true)]
-    pub cache_mebibytes: i64,
+    cache_mebibytes: i64,
     /// Thread counts of the read and read-write cases (comma-separated), each at most the number of
     /// cores. Default: 1 and all cores.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    pub threads: Vec<i64>,
+    threads: Vec<i64>,
     /// Minimum measuring time per streaming case, seconds, in [0, 3600] (at least one pass is timed).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    pub seconds: f64,
+    seconds: f64,
     /// Print CSV: case,threads,mebibytes,gigabytes_per_s
     #[arg(long)]
-    pub csv: bool,
+    csv: bool,
 }
 
 /// A count given on the command line, checked to lie in `range`.
@@ -269,7 +301,14 @@ fn handover(elements: usize, evict_elements: usize) -> Handover {
     })
 }
 
-pub fn run(args: &BenchMemoryArgs) -> Result<(), CliError> {
+fn main() {
+    if let Err(CliError(message)) = run(&BenchMemoryArgs::parse()) {
+        eprintln!("error: {message}");
+        std::process::exit(1);
+    }
+}
+
+fn run(args: &BenchMemoryArgs) -> Result<(), CliError> {
     check_seconds(args.seconds)?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads: Vec<usize> = if args.threads.is_empty() {
