@@ -21,40 +21,29 @@
 //! ```
 //!
 //! Units: metres, kilograms, seconds, newtons. Results are bit-identical whatever rayon's thread count.
+//!
+//! Reading the source: `sim.rs` is the step; `solver.rs` the position-based sub-step on one screen
+//! (forces, predict, project in batches, update velocities), which every fast path in `fast/` (a grid's
+//! strips, vectorised loops, threads and wavefronts) is tested against bit for bit; `mass_spring.rs` the
+//! force-based methods; `collision.rs` the contacts.
 
 // Standard output belongs to the program using the library: results and errors are returned.
 #![warn(clippy::print_stdout)]
 
-// Unsafe code is denied workspace-wide and allowed only in the modules below that need it, each block
-// with a `// SAFETY:` comment: parallel passes write disjoint parts of one buffer through `DisjointSlice`
-// (a colouring or a partition guarantees no index is touched by two threads at once), and the AVX-512
-// strips use raw-pointer loads and stores. `vectorise::by_cpu!` allows its own dispatch blocks.
+// Unsafe code is denied workspace-wide and allowed only in `fast`, each block with a `// SAFETY:`
+// comment: parallel passes write disjoint parts of one buffer (a colouring or a partition guarantees no
+// index is touched by two threads at once), and the AVX-512 strips use raw-pointer loads and stores.
 mod collision;
-#[allow(unsafe_code)]
-mod components;
 mod error;
 #[allow(unsafe_code)]
-mod grid_constraints;
-#[allow(unsafe_code)]
-mod grid_wind;
+mod fast;
 mod intersections;
 mod mass_spring;
 mod model;
 mod nearest;
-#[allow(unsafe_code)]
-mod parallel;
 mod params;
-mod pipeline;
-#[allow(unsafe_code)]
-mod position_based;
 mod sim;
 mod solver;
-mod staggered;
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-mod strips_avx512;
-mod vectorise;
-mod wavefront;
 pub mod wind;
 
 pub use error::{DivergenceReason, ModelError, ParamError, StepError};

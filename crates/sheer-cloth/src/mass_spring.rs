@@ -7,7 +7,7 @@
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use crate::parallel::{fill, sum};
+use crate::fast::parallel::{fill, sum};
 use crate::sim::{CgScratch, Simulation, family_index};
 
 /// `update(i, &mut x_i, &mut v_i)` for every particle.

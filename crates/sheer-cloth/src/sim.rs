@@ -10,18 +10,20 @@ use std::ops::Range;
 use glam::{DAffine3, DVec3, Vec3};
 
 use crate::collision::Contacts;
-use crate::components::Xyz;
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
-use crate::grid_constraints::GridConstraints;
-use crate::grid_wind::{BodyForce, SplitShares, add_grid_triangle_forces, grid_triangle_forces};
+use crate::fast::components::Xyz;
+use crate::fast::grid_constraints::GridConstraints;
+use crate::fast::grid_step::PlanCache;
+use crate::fast::grid_step::anchor_run_ends;
+use crate::fast::grid_wind::{
+    BodyForce, SplitShares, add_grid_triangle_forces, grid_triangle_forces,
+};
+use crate::fast::parallel::{TeamSlot, fill, first_index_screened, sum};
+use crate::fast::pipeline::Progress;
+use crate::fast::vectorise::by_cpu;
 use crate::model::{ClothModel, GridShape, Spring, SpringKind, check_length};
 use crate::nearest::nearest_points;
-use crate::parallel::{TeamSlot, fill, first_index_screened, sum};
 use crate::params::{Method, SimParams, SpringParams, Wind};
-use crate::pipeline::Progress;
-use crate::position_based::PlanCache;
-use crate::position_based::anchor_run_ends;
-use crate::vectorise::by_cpu;
 use crate::wind::{WindField, corner_share_of_triangle_force};
 
 /// Error building a [`Simulation`].
@@ -183,7 +185,7 @@ pub struct Simulation {
     pub(crate) tether_anchors: Vec<u32>,
     pub(crate) tether_lengths: Vec<f64>,
     /// Per particle, the index after the last of the particles from it on that share its anchor
-    /// (`position_based::anchor_run_ends`).
+    /// (`fast::grid_step::anchor_run_ends`).
     pub(crate) tether_run_ends: Vec<u32>,
     /// On a grid, how many rows at most lie between a particle and its anchor (0 without pins): how far
     /// ahead of a row's attachments the pins' positions must be known.
@@ -224,7 +226,7 @@ pub struct Simulation {
     pub(crate) denominator_key: Option<SolverKey>,
     /// Helper threads of the position-based grid solver (empty until a parallel step needs them).
     pub(crate) team: TeamSlot,
-    /// The parts' progress through a pipelined sub-step ([`Pipeline`](crate::pipeline::Pipeline)).
+    /// The parts' progress through a pipelined sub-step ([`Pipeline`](crate::fast::pipeline::Pipeline)).
     pub(crate) progress: Progress,
     pub(crate) pipeline_plan: PlanCache,
     /// Grids: the constraints in row strips, which the position-based solvers project instead of the
@@ -232,14 +234,11 @@ pub struct Simulation {
     pub(crate) grid_constraints: Option<GridConstraints>,
     /// How a grid's position-based sub-step orders its batches (tests pick one; the solver picks by size).
     pub(crate) grid_sweep: GridSweep,
-    /// Whether a grid's position-based sub-step skips the batches of a switched-off family (always, but
-    /// for a test that compares the skip with projecting them to no effect).
-    pub(crate) skip_switched_off_families: bool,
     /// How many sub-steps each pass of the last whole step's wavefront ran at most (0: the last step ran
     /// none): for the tests to know what they compared.
     pub(crate) wavefront_substeps_per_pass: usize,
     /// How those wavefronts shared out the rows among the threads (`None`: the last step ran none).
-    pub(crate) wavefront_way: Option<crate::position_based::PassesGo>,
+    pub(crate) wavefront_way: Option<crate::fast::grid_step::PassesGo>,
     /// Whether the next pass of two opposed parts sweeps part 0 upwards: they turn round every pass,
     /// from step to step too, so that each pass starts on the rows the one before ended on.
     pub(crate) opposed_upward_first: bool,
@@ -277,7 +276,7 @@ pub(crate) enum GridSweep {
     Passes,
     /// A pass over the cloth per batch, the batches along rows too.
     BatchByBatch,
-    /// The one-pass wavefront in this many parts ([`Wavefront`](crate::wavefront::Wavefront)), if they
+    /// The one-pass wavefront in this many parts ([`Wavefront`](crate::fast::wavefront::Wavefront)), if they
     /// fit; a whole step's sub-steps up to `substeps_per_pass` a pass (fewer where they do not fit),
     /// or with 0 each sub-step on its own.
     Wavefront {
@@ -285,16 +284,16 @@ pub(crate) enum GridSweep {
         substeps_per_pass: usize,
     },
     /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
-    /// ([`Pipeline`](crate::pipeline::Pipeline)); it must fit.
+    /// ([`Pipeline`](crate::fast::pipeline::Pipeline)); it must fit.
     Pipeline,
     /// On a team of threads (it must have one), a whole step as a chain of wavefronts
-    /// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)), links of `substeps_per_link`
+    /// ([`Wavefront::run_link`](crate::fast::wavefront::Wavefront::run_link)), links of `substeps_per_link`
     /// sub-steps (the last may have fewer), link `k` on thread `k mod threads`; sub-step by sub-step
     /// pass by pass where a whole step cannot go in wavefronts.
     Chain { substeps_per_link: usize },
     /// On a team of two threads (it must have one), a whole step's passes of up to
     /// `substeps_per_pass` sub-steps each as two parts sweeping opposite ways
-    /// ([`Wavefront::opposed_parts`](crate::wavefront::Wavefront::opposed_parts)); sub-step by
+    /// ([`Wavefront::opposed_parts`](crate::fast::wavefront::Wavefront::opposed_parts)); sub-step by
     /// sub-step pass by pass where a whole step cannot go in wavefronts, or where the attachments
     /// read pins of other rows.
     Opposed { substeps_per_pass: usize },
@@ -438,7 +437,6 @@ impl Simulation {
                 .grid
                 .and_then(|shape| GridConstraints::new(shape, &model.springs)),
             grid_sweep: GridSweep::Auto,
-            skip_switched_off_families: true,
             wavefront_substeps_per_pass: 0,
             wavefront_way: None,
             opposed_upward_first: false,
@@ -781,7 +779,7 @@ impl Simulation {
     }
 
     /// For the position-based solvers on a grid, which sum each row's forces in their first pass over
-    /// the rows ([`predict_row_with_forces`](crate::grid_wind::predict_row_with_forces)): what the rows add to the body force
+    /// the rows ([`predict_row_with_forces`](crate::fast::grid_wind::predict_row_with_forces)): what the rows add to the body force
     /// ([`RowForces`]), or, when the triangles are not the grid's own, `None` after summing the forces
     /// into `self.forces` ([`compute_forces`](Simulation::compute_forces)).
     pub(crate) fn prepare_row_forces(&mut self, time: f64) -> Option<RowForces> {

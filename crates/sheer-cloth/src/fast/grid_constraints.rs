@@ -14,18 +14,19 @@
 //! Within a batch no two constraints share a particle, so the order inside it does not matter and the
 //! compiler may vectorise each strip ([`by_cpu!`]); the threads may share the strips with the same
 //! result. Batches run bending first, then shear, then stretch, so that each sweep ends on the stiffest
-//! family. The projection of one constraint is [`project`], which the general path uses as well.
+//! family. The projection of one constraint is [`crate::solver::project`], the plain code's.
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::DVec3;
 
-use crate::components::{DisjointXyz, XyzMut, XyzRef};
+use crate::fast::components::{DisjointXyz, XyzMut, XyzRef};
+use crate::fast::parallel::{DisjointSlice, parts};
+use crate::fast::vectorise::by_cpu;
 use crate::model::{GridShape, Spring, SpringKind};
-use crate::parallel::{DisjointSlice, parts};
 use crate::sim::{family_index, may_exceed_strain};
-use crate::vectorise::by_cpu;
+use crate::solver::{FamilyConstants, project};
 
 /// How a strip's constraints sit in the particle array.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,7 +89,7 @@ pub(crate) struct GridConstraints {
     /// `strips`), and how many rows each of them spans beyond its first (`.1`). Batches of span 0 lie
     /// within rows (the stretch and bending along rows): the solver projects them row by row in one pass
     /// with the per-particle work of the same rows; and the one-pass sweep
-    /// ([`Wavefront`](crate::wavefront::Wavefront)) runs every batch row by row.
+    /// ([`Wavefront`](crate::fast::wavefront::Wavefront)) runs every batch row by row.
     pub by_last_row: Vec<(Vec<Range<usize>>, usize)>,
 }
 
@@ -397,94 +398,12 @@ fn last_rows_of_batch(
     Some((by_row, span.unwrap_or(0)))
 }
 
-/// Per-sub-step constants of one constraint family: `(α̃, γ)` of XPBD (Macklin et al. 2016 eqs. (18) and
-/// (26)); unused by PBD.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct FamilyConstants {
-    /// `α̃ = α/h²`, with compliance `α = 1/k` (m/N) and sub-step `h` (s): 1/kg.
-    pub scaled_compliance: f64,
-    /// `γ = α β / h` with damping `β` (N·s/m): dimensionless.
-    pub gamma: f64,
-}
-
-/// Projects one distance constraint `|x_a − x_b| = rest` (Macklin, Müller & Chentanez 2016, eq. (18) with
-/// the damping of eq. (26); PBD: Müller et al. 2007 §3.3 with the divisor folded into
-/// `inverse_denominator`). Nothing moves when the constraint is inactive (`inverse_denominator` = 0: a
-/// switched-off family or both ends pinned) or the ends coincide (no gradient direction; ends closer than
-/// about 1.5·10⁻¹⁵⁴ m, whose squared distance is not a normal `f64`, count as coincident). With
-/// `MULTIPLIERS` the accumulated multiplier λ is read and updated; without it λ is taken as 0 (one
-/// iteration: it is always 0 when read). Without `DAMPED` (a family with no damping, γ = 0) the damping
-/// term is left out, and with it the start positions it needs (a sixth of the bytes a projection reads).
-///
-/// With `d = x_a − x_b`, `L = |d|`, the gradient `∇C = d/L` and the start-to-now displacement
-/// `m = (x_a − x_a⁰) − (x_b − x_b⁰)`, eq. (18)/(26) give `Δλ = (−C − α̃λ − γ ∇C·m) / ((1 + γ) w + α̃)` and
-/// the step `Δx_a = w_a Δλ ∇C`. Written over `L² = d·d` instead of `L`,
-///
-/// `Δλ/L = ((rest − L − α̃λ) L − γ d·m) · inverse_denominator / L²`, `Δx_a = w_a (Δλ/L) d`,
-///
-/// the one division (`1/L²`) no longer waits for the square root, and nothing but the elastic term
-/// does: the chain of dependent operations from the particles' loads to their stores is about a third
-/// shorter (the square root's result used to feed a division, then the gradient, the damping rate and
-/// the step, one after the other). The strip loops were bound by that chain, not by their operation
-/// count: too few blocks of eight fit in the CPU's window to cover it. Mathematically the same update; the rounding differs from `Δλ·(d·(1/L))` by a few ulp.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn project<const PBD: bool, const MULTIPLIERS: bool, const DAMPED: bool>(
-    x_a: &mut DVec3,
-    x_b: &mut DVec3,
-    previous_a: DVec3,
-    previous_b: DVec3,
-    inverse_mass_a: f64,
-    inverse_mass_b: f64,
-    rest_length: f64,
-    inverse_denominator: f64,
-    lambda: &mut f64,
-    family: FamilyConstants,
-) {
-    let delta = *x_a - *x_b;
-    let squared_length = delta.dot(delta);
-    let inverse_squared_length = 1.0 / squared_length;
-    let length = squared_length.sqrt();
-    // −C, less α̃λ with multipliers (without them λ is 0 and so is its term, α̃ being finite: left out).
-    let elastic = if !PBD && MULTIPLIERS {
-        (rest_length - length) - family.scaled_compliance * *lambda
-    } else {
-        rest_length - length
-    };
-    // (Δλ·L²)/inverse_denominator: the elastic term times L, less the damping's γ·(d·m) (∇C·m = d·m/L).
-    let numerator = if !PBD && DAMPED {
-        let moved = (*x_a - previous_a) - (*x_b - previous_b);
-        elastic * length - family.gamma * delta.dot(moved)
-    } else {
-        elastic * length
-    };
-    // Selected, not branched on, so that the strip loops vectorise. A squared length below the normal
-    // range would make `1/L²` infinite.
-    let active = inverse_denominator != 0.0 && squared_length >= f64::MIN_POSITIVE;
-    // Δλ/L.
-    let coefficient = if active {
-        numerator * (inverse_denominator * inverse_squared_length)
-    } else {
-        0.0
-    };
-    if MULTIPLIERS {
-        *lambda += if active { coefficient * length } else { 0.0 };
-    }
-    let step = if active {
-        coefficient * delta
-    } else {
-        DVec3::ZERO
-    };
-    *x_a += inverse_mass_a * step;
-    *x_b -= inverse_mass_b * step;
-}
-
 /// Projects `strips` one after another (the strips of a batch, or of a batch's rows), on the whole
 /// cloth's arrays: `positions`, `previous` (start positions) and `inverse_masses` per particle,
 /// `rest_lengths`, `inverse_denominators` and `lambdas` per constraint, and each family's constants.
 /// With AVX-512 each run of strips of one family and layout goes in one call
-/// ([`strips_avx512::project_apart_strips`](crate::strips_avx512::project_apart_strips),
-/// [`strips_avx512::project_along_strips`](crate::strips_avx512::project_along_strips)); without it,
+/// ([`strips_avx512::project_apart_strips`](crate::fast::strips_avx512::project_apart_strips),
+/// [`strips_avx512::project_along_strips`](crate::fast::strips_avx512::project_along_strips)); without it,
 /// one strip at a time through [`project_strip`]. The same bits either way
 /// (`batches_in_one_call_match_the_one_constraint_projection`, the strip tests at every length, and the
 /// solver's tests on both paths).
@@ -507,7 +426,7 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
     #[cfg(target_arch = "x86_64")]
     let arrays = std::arch::is_x86_feature_detected!("avx512f").then(|| {
         let (previous, previous_len) = previous.pointers();
-        crate::strips_avx512::StripArrays::new(
+        crate::fast::strips_avx512::StripArrays::new(
             positions.pointers(),
             (previous.map(<*mut f64>::cast_const), previous_len),
             inverse_masses,
@@ -572,14 +491,14 @@ pub(crate) unsafe fn project_strips<const PBD: bool, const MULTIPLIERS: bool>(
 /// A run of strips of one family and layout (see [`project_strips`]) in one AVX-512 call.
 ///
 /// # Safety
-/// As [`strips_avx512::project_apart_strips`](crate::strips_avx512::project_apart_strips).
+/// As [`strips_avx512::project_apart_strips`](crate::fast::strips_avx512::project_apart_strips).
 #[cfg(target_arch = "x86_64")]
 unsafe fn project_run<const PBD: bool, const MULTIPLIERS: bool>(
-    arrays: crate::strips_avx512::StripArrays,
+    arrays: crate::fast::strips_avx512::StripArrays,
     strips: &[Strip],
     family: FamilyConstants,
 ) {
-    use crate::strips_avx512::{project_along_strips, project_apart_strips};
+    use crate::fast::strips_avx512::{project_along_strips, project_apart_strips};
     let Some(strip) = strips.first() else {
         return;
     };
@@ -789,7 +708,7 @@ by_cpu! {
     /// (constraint `m·HALF + j` joins particles `2·HALF·m + j` and `2·HALF·m + j + HALF`) one
     /// constraint at a time: the path of a CPU without AVX-512 (compiled per instruction set,
     /// [`by_cpu!`]), and the reference the AVX-512 blocks
-    /// ([`strips_avx512::project_along_strips`](crate::strips_avx512::project_along_strips)) are
+    /// ([`strips_avx512::project_along_strips`](crate::fast::strips_avx512::project_along_strips)) are
     /// tested against.
     pub(crate) fn project_along_loop<
         const PBD: bool,
@@ -838,7 +757,7 @@ by_cpu! {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Xyz;
+    use crate::fast::components::Xyz;
 
     /// [`joined_along`] of one layout.
     type JoinedAlong =
@@ -958,8 +877,8 @@ mod tests {
         rest: &[f64],
         denominators: &[f64],
         lambdas: &mut [f64],
-    ) -> crate::strips_avx512::StripArrays {
-        crate::strips_avx512::StripArrays::new(
+    ) -> crate::fast::strips_avx512::StripArrays {
+        crate::fast::strips_avx512::StripArrays::new(
             x.disjoint().pointers(),
             (
                 [&previous.x, &previous.y, &previous.z].map(|c| c.as_ptr()),
@@ -1000,7 +919,7 @@ mod tests {
             let arrays = whole_arrays(&mut split, &previous, w, rest, denominators, lambdas);
             // SAFETY: the CPU has AVX-512F; the arrays are as long as given; one thread.
             unsafe {
-                crate::strips_avx512::project_apart_strips::<PBD, MULTIPLIERS, DAMPED>(
+                crate::fast::strips_avx512::project_apart_strips::<PBD, MULTIPLIERS, DAMPED>(
                     arrays,
                     [(0, n, 0, count)].into_iter(),
                     family,
@@ -1056,7 +975,7 @@ mod tests {
             let arrays = whole_arrays(&mut split, &previous, w, rest, denominators, lambdas);
             // SAFETY: the CPU has AVX-512F; the arrays are as long as given; one thread.
             unsafe {
-                crate::strips_avx512::project_along_strips::<PBD, MULTIPLIERS, DAMPED, HALF>(
+                crate::fast::strips_avx512::project_along_strips::<PBD, MULTIPLIERS, DAMPED, HALF>(
                     arrays,
                     [(0, 0, constraints)].into_iter(),
                     family,

@@ -22,21 +22,22 @@ use glam::DVec3;
 
 use std::ops::Range;
 
-use crate::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
-use crate::grid_constraints::{FamilyConstants, GridConstraints, Strip, project_strips};
-use crate::grid_wind::{
+use crate::fast::components::{DisjointXyz, Xyz, XyzMut, XyzRef};
+use crate::fast::grid_constraints::{GridConstraints, Strip, project_strips};
+use crate::fast::grid_wind::{
     cells_around, predict_row_with_forces, split_cell_run, split_grid_triangle_forces,
 };
-use crate::parallel::{
+use crate::fast::parallel::{
     DisjointSlice, one_index_per_thread, parts, team_in_equal_parts, team_threads,
 };
+use crate::fast::pipeline::{Pipeline, Progress, Stage};
+use crate::fast::vectorise::by_cpu;
+use crate::fast::wavefront::Wavefront;
 use crate::params::SimParams;
 use crate::params::{Method, Wind};
-use crate::pipeline::{Pipeline, Progress, Stage};
 use crate::sim::{GridSweep, RowForces, Simulation, family_index};
+use crate::solver::FamilyConstants;
 use crate::solver::tethered;
-use crate::vectorise::by_cpu;
-use crate::wavefront::Wavefront;
 
 /// A grid's sweeps run as one wavefront a sub-step from this many particles: below it the cloth's data
 /// largely stays in the last-level cache from pass to pass, and pass by pass measured as fast or faster.
@@ -600,9 +601,9 @@ impl Simulation {
         let parallel = self.parallel();
         // A switched-off family (stiffness 0) has every inverse divisor 0, so its constraints move
         // nothing (`grid_constraints::project`); its batches are skipped rather than computed to no
-        // effect, so that switching a part of the model off saves its cost.
-        let skip_off = self.skip_switched_off_families;
-        let active: [bool; 3] = std::array::from_fn(|f| !skip_off || self.family[f].0 != 0.0);
+        // effect, so that switching a part of the model off saves its cost (the plain code projects
+        // them: same bits, tested in `solver.rs`).
+        let active: [bool; 3] = std::array::from_fn(|f| self.family[f].0 != 0.0);
         let Simulation {
             split_positions: positions,
             split_velocities: velocities,
@@ -1622,52 +1623,6 @@ mod tests {
         });
     }
 
-    /// A switched-off family's batches are skipped, and that gives the bits of projecting them with their
-    /// zero divisors (which move nothing): each family switched off, and two at once, on one thread and
-    /// on two.
-    #[test]
-    fn skipping_a_switched_off_family_gives_the_bits_of_projecting_it() {
-        use crate::params::SpringParams;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        for method in THREE_POSITION_BASED {
-            for parallel in [false, true] {
-                let run = |off: [bool; 3], skip: bool| {
-                    let mut sim = windy_flag(23, 13, GridSpec::default().height, method, parallel);
-                    let mut params = sim.params().clone();
-                    let families = [&mut params.stretch, &mut params.shear, &mut params.bend];
-                    for (family, off) in families.into_iter().zip(off) {
-                        if off {
-                            *family = SpringParams::disabled();
-                        }
-                    }
-                    sim.set_params(params).unwrap();
-                    sim.skip_switched_off_families = skip;
-                    pool.install(|| {
-                        for _ in 0..20 {
-                            sim.step(1.0 / 60.0).unwrap();
-                        }
-                    });
-                    state_bits(&sim)
-                };
-                let all_on = run([false; 3], true);
-                for off in [
-                    [true, false, false],
-                    [false, true, false],
-                    [false, false, true],
-                    [false, true, true],
-                ] {
-                    let skipped = run(off, true);
-                    let what = format!("{method:?}, {off:?} off, parallel {parallel}");
-                    assert_eq!(skipped, run(off, false), "{what}");
-                    assert_ne!(skipped, all_on, "{what}: the family is not off");
-                }
-            }
-        }
-    }
-
     /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
     /// the batches along rows, the attachments and the velocities in another) give the bits of the same
     /// work done pass by pass: batch by batch, and the forces summed beforehand by the general path.
@@ -1773,7 +1728,7 @@ mod tests {
     #[test]
     fn the_prediction_runs_before_every_attachment_that_reads_its_pins() {
         use super::WaveItem;
-        use crate::wavefront::tests::{before, schedule};
+        use crate::fast::wavefront::tests::{before, schedule};
         let sim = windy_flag(9, 20, 3.0, Method::default(), false);
         let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
         // Whether every end of a sweep runs surely after the predictions within `reach` rows of it.
@@ -2301,7 +2256,7 @@ mod tests {
     #[test]
     fn the_team_the_rows_allow_fits_the_pipeline() {
         use super::PipelineStages;
-        use crate::pipeline::Progress;
+        use crate::fast::pipeline::Progress;
         use crate::sim::team_threads_for_rows;
         for columns in [2, 5, 64] {
             for rows in 10..=200 {
@@ -2347,7 +2302,7 @@ mod tests {
     #[test]
     fn in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again() {
         use super::WaveItem;
-        use crate::wavefront::tests::{before, schedule};
+        use crate::fast::wavefront::tests::{before, schedule};
         let sim = windy_flag(9, 20, 3.0, Method::default(), false);
         let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
         // Whether the schedule keeps every attachment after its sub-step's predictions within `reach`
@@ -2421,8 +2376,8 @@ mod tests {
     #[test]
     fn in_a_chain_each_pins_buffer_is_read_before_it_is_gathered_again() {
         use super::WaveItem;
-        use crate::wavefront::Wavefront;
-        use crate::wavefront::tests::chain_before;
+        use crate::fast::wavefront::Wavefront;
+        use crate::fast::wavefront::tests::chain_before;
         let sim = windy_flag(9, 20, 3.0, Method::default(), false);
         let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
         let (mut checked, mut one_buffer_broken) = (0, false);
@@ -2581,8 +2536,8 @@ mod tests {
 #[cfg(test)]
 mod tether_tests {
     use super::{ANCHOR_RUN, Tethers, anchor_run_ends};
-    use crate::components::Xyz;
-    use crate::parallel::DisjointSlice;
+    use crate::fast::components::Xyz;
+    use crate::fast::parallel::DisjointSlice;
     use glam::DVec3;
 
     /// A deterministic pseudo-random number in [−0.5, 0.5).

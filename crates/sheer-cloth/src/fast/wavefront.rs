@@ -69,7 +69,7 @@
 
 use std::ops::Range;
 
-use crate::pipeline::Progress;
+use crate::fast::pipeline::Progress;
 
 /// The schedule of a sequence of items over the rows of a grid.
 #[derive(Clone, Debug)]

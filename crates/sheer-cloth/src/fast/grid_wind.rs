@@ -21,11 +21,11 @@
 
 use std::ops::Range;
 
-use crate::components::{Xyz, XyzMut, XyzRef};
+use crate::fast::components::{Xyz, XyzMut, XyzRef};
+use crate::fast::parallel::{DisjointSlice, parts};
+use crate::fast::vectorise::by_cpu;
 use crate::model::GridShape;
-use crate::parallel::{DisjointSlice, parts};
 use crate::params::Wind;
-use crate::vectorise::by_cpu;
 use crate::wind::corner_share_of_triangle_force;
 use glam::DVec3;
 
@@ -548,7 +548,7 @@ fn add_component_at_particle(
 }
 
 /// The prediction of one row with its forces summed on the way (the joined [`row_forces`] followed by
-/// the prediction, `position_based::predict_components`, in one loop per component: the same operations
+/// the prediction, `fast::grid_step::predict_components`, in one loop per component: the same operations
 /// in the same order, so the same bits): the row's body force plus, with `cells`, the wind's shares of the
 /// cell rows above and below; then `v += h w f`, the start position kept, `x += h v`.
 ///
@@ -674,7 +674,7 @@ fn predict_particle(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Xyz;
+    use crate::fast::components::Xyz;
 
     /// The row-wise pass (in whichever instruction set this CPU runs it) gives the same bits as the
     /// general per-triangle path, including degenerate triangles and triangles at rest in the air.

@@ -246,7 +246,7 @@ struct Timing {
 /// `2s + 2` once all its items of stage `s` are. Also how long the parts were busy, from which it learns
 /// how far to move the cuts so that they are equally busy ([`rebalance`](Progress::rebalance)). A chain
 /// of wavefronts uses its counters too, each link's counting the steps it has finished
-/// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)).
+/// ([`Wavefront::run_link`](crate::fast::wavefront::Wavefront::run_link)).
 pub(crate) struct Progress {
     counters: Vec<Counter>,
     poisoned: AtomicBool,
@@ -310,7 +310,7 @@ impl Progress {
     }
 
     /// Zero progress for the `links` links of a chain of wavefronts
-    /// ([`Wavefront::run_link`](crate::wavefront::Wavefront::run_link)): one counter per link, the
+    /// ([`Wavefront::run_link`](crate::fast::wavefront::Wavefront::run_link)): one counter per link, the
     /// cuts a pipeline learnt left as they are. Must happen before the links start.
     pub fn reset_links(&mut self, links: usize) {
         if self.counters.len() < links {

@@ -12,12 +12,12 @@ use std::ops::Range;
 
 use glam::DVec3;
 
-use crate::parallel::DisjointSlice;
-use crate::staggered::Staggered;
-use crate::vectorise::by_cpu;
+use crate::fast::parallel::DisjointSlice;
+use crate::fast::staggered::Staggered;
+use crate::fast::vectorise::by_cpu;
 
 /// Owned vectors split by component, each a [`Staggered`] array: it starts on a line of its page of its
-/// own and is followed by a page of unused capacity ([`GAP`](crate::staggered::GAP)).
+/// own and is followed by a page of unused capacity ([`GAP`](crate::fast::staggered::GAP)).
 ///
 /// The gap: allocated one after another, the components lay end to start: the last rows of a grid's x
 /// (which the last thread of a team works on) shared cache lines and a page with the first rows of its
@@ -270,7 +270,7 @@ mod tests {
         for copy in [&state, &state.clone()] {
             for component in [&copy.x, &copy.y, &copy.z] {
                 assert_eq!(component.len(), 2944);
-                assert!(component.spare_capacity() >= crate::staggered::GAP);
+                assert!(component.spare_capacity() >= crate::fast::staggered::GAP);
             }
         }
         let vectors: Vec<DVec3> = (0..5).map(|i| DVec3::splat(i as f64)).collect();
