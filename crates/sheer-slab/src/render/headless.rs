@@ -12,10 +12,14 @@ use super::slab_renderer::{
     SlabDraw, SlabFrame, SlabRenderer, SlabRendererOptions, SlabTarget, TargetOutput,
 };
 use super::{
-    Background, Camera, EvaluationPath, LIT_SIDE, LinearImage, OUTPUT_SINGLE, RenderError,
-    SHADER_BODY, SHADOW, ShadingParams, SlabMesh, TargetFormat, extend_with_f16_texels,
-    extend_with_f32_texels, first_overflowed_channel, target_wgpu_format, validated,
+    Background, Camera, EvaluationPath, LinearImage, RenderError, ShadingParams, SlabMesh,
+    TargetFormat, extend_with_f16_texels, extend_with_f32_texels, first_overflowed_channel,
+    target_wgpu_format,
 };
+// The shader checks' (`test-support`).
+#[cfg(any(test, feature = "test-support"))]
+use super::{LIT_SIDE, OUTPUT_SINGLE, SHADER_BODY, SHADOW, validated};
+#[cfg(any(test, feature = "test-support"))]
 use crate::all_orders::AllOrdersTable;
 
 /// The depth attachment's format: every adapter renders and multisamples it.

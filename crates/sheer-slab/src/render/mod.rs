@@ -309,7 +309,7 @@ fn extend_with_f16_texels(pixels: &mut Vec<[f32; 4]>, bytes: &[u8]) {
     pixels.extend(bytes.chunks_exact(8).map(|texel| {
         std::array::from_fn(|channel| {
             let at = 2 * channel;
-            f16_bits_to_f32(u16::from_le_bytes([texel[at], texel[at + 1]]))
+            cpu::f16_bits_to_f32(u16::from_le_bytes([texel[at], texel[at + 1]]))
         })
     }));
 }

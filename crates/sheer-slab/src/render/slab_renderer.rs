@@ -1344,7 +1344,8 @@ impl SlabRenderer {
         Ok(())
     }
 
-    /// Group 0 without a shadow map (the empty stand-in in its place).
+    /// Group 0 without a shadow map (the empty stand-in in its place), for the shader checks.
+    #[cfg(any(test, feature = "test-support"))]
     pub(crate) fn bind_group(&self) -> wgpu::BindGroup {
         self.bind_group_with_shadows(false)
     }
