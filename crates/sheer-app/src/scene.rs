@@ -35,6 +35,7 @@ pub struct ShadingSection {
     pub scattering: ScatteringOrders,
     /// With all orders on the fragment path: the table per vertex (interpolated) or per fragment.
     pub all_orders_lookup: AllOrdersSampling,
+    /// Where the thin-slab model is evaluated: `fragment`, `vertex` or `cpu` (never `Baseline`, a model).
     pub path: EvaluationPath,
     /// τ1, the slab's optical thickness (dimensionless, > 0), per channel.
     pub optical_thickness: [f32; 3],
@@ -673,6 +674,13 @@ impl Scene {
             "flag.areal_density",
             f.areal_density,
             "must be finite and > 0 kg/m²",
+        )?;
+        // A file cannot name it (the enum's serde skips it); code that sets it gets the model instead.
+        check(
+            self.shading.path != EvaluationPath::Baseline,
+            "shading.path",
+            "baseline",
+            "is a shading model: set `shading.model = \"baseline\"`",
         )?;
         // Checked in f64, as the simulator holds it (narrowed first, 1e308 was reported as inf).
         let origin = f.origin.to_array();

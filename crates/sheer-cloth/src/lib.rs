@@ -30,12 +30,10 @@
 // Standard output belongs to the program using the library: results and errors are returned.
 #![warn(clippy::print_stdout)]
 
-// Unsafe code is denied workspace-wide and allowed only in `fast`, each block with a `// SAFETY:`
-// comment: parallel passes write disjoint parts of one buffer (a colouring or a partition guarantees no
-// index is touched by two threads at once), and the AVX-512 strips use raw-pointer loads and stores.
+// Unsafe code is denied workspace-wide and allowed only in the modules of `fast` that need it (and the
+// CPU-dispatch blocks `fast::vectorise::by_cpu!` expands), each block with a `// SAFETY:` comment.
 mod collision;
 mod error;
-#[allow(unsafe_code)]
 mod fast;
 mod intersections;
 mod mass_spring;

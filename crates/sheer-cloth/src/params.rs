@@ -598,8 +598,9 @@ pub struct SimParams {
     pub long_range_attachments: bool,
     /// When a step counts as diverged and is undone ([`StepError::Diverged`](crate::StepError::Diverged)).
     pub divergence: DivergenceLimits,
-    /// Below this many particles every pass runs on one thread. From it, the passes run on rayon's
-    /// pool, or, for the position-based methods on a grid, on a team of as many threads as rayon's
+    /// Below this many particles every pass runs on one thread. From it, the mass–spring methods' passes
+    /// run on rayon's pool (the position-based methods on a general mesh stay on one thread), and the
+    /// position-based methods on a grid on a team of as many threads as rayon's
     /// pool has (but at most a fifth of the grid's rows, and at least two), which spin between
     /// passes and stay with the simulation (parked while it is not stepping). Results are
     /// bit-identical either way. The team pays from about 400 particles when the machine has a free

@@ -146,9 +146,10 @@ pub(crate) fn team_claims_its_passes(particles: usize, threads: usize) -> bool {
 /// them, or the plain code of `solver.rs` for every cloth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Path {
+    /// The fast paths on a grid; a general mesh steps through the plain code.
     Fast,
+    /// The plain code on every cloth: the tests' reference (production never asks for it).
     #[cfg_attr(not(test), allow(dead_code))]
-    // production steps a general mesh plainly on `Fast` too
     Plain,
 }
 

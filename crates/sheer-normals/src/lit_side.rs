@@ -62,62 +62,73 @@ pub struct LitSide<S = f32> {
     pub face: Face,
 }
 
-/// A 3-vector the lit-side rule takes: glam's `Vec3` or `DVec3` (sealed).
+/// A 3-vector the lit-side rule takes: glam's `Vec3` (f32) or `DVec3` (f64). Sealed: its operations
+/// take a token only this crate can make, so they are not part of the API.
 pub trait LitSideVector: sealed::Sealed + Copy + std::ops::Neg<Output = Self> {
     /// `f32` or `f64`.
     type Scalar: Copy + PartialOrd + Default;
-    /// The unit vector along `self`, or `None` when it is zero or not finite (scale-robust).
-    fn unit(self) -> Option<Self>;
-    /// Every component finite.
-    fn finite(self) -> bool;
-    /// The dot product.
-    fn dot_with(self, other: Self) -> Self::Scalar;
-    /// |s|, which also turns −0 into +0.
-    fn magnitude(s: Self::Scalar) -> Self::Scalar;
-    /// The zero vector.
-    const ZERO: Self;
+    #[doc(hidden)]
+    fn unit(self, _: Token) -> Option<Self>;
+    #[doc(hidden)]
+    fn finite(self, _: Token) -> bool;
+    #[doc(hidden)]
+    fn dot_with(self, other: Self, _: Token) -> Self::Scalar;
+    #[doc(hidden)]
+    fn magnitude(s: Self::Scalar, _: Token) -> Self::Scalar;
+    #[doc(hidden)]
+    fn zero(_: Token) -> Self;
 }
 
 mod sealed {
     pub trait Sealed {}
     impl Sealed for glam::Vec3 {}
     impl Sealed for glam::DVec3 {}
+
+    /// Proof that the caller is this crate.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Token(pub(crate) ());
 }
+use sealed::Token;
 
 impl LitSideVector for Vec3 {
     type Scalar = f32;
-    fn unit(self) -> Option<Self> {
+    /// Scale-robust: tiny and huge vectors neither underflow nor overflow (`unit_or_none`).
+    fn unit(self, _: Token) -> Option<Self> {
         unit_or_none(self.into()).map(Vec3::from)
     }
-    fn finite(self) -> bool {
+    fn finite(self, _: Token) -> bool {
         self.is_finite()
     }
-    fn dot_with(self, other: Self) -> f32 {
+    fn dot_with(self, other: Self, _: Token) -> f32 {
         Vec3A::from(self).dot(other.into())
     }
-    fn magnitude(s: f32) -> f32 {
+    fn magnitude(s: f32, _: Token) -> f32 {
         s.abs()
     }
-    const ZERO: Self = Vec3::ZERO;
+    fn zero(_: Token) -> Self {
+        Vec3::ZERO
+    }
 }
 
 impl LitSideVector for DVec3 {
     type Scalar = f64;
-    fn unit(self) -> Option<Self> {
-        // f64's exponent range leaves the unit length of any scene vector clear of under- and
-        // overflow; `normalize_or_zero` returns zero for a zero or non-finite vector.
+    /// `normalize_or_zero`: a vector shorter than about 1e-154 or longer than about 1e154 (m) counts as
+    /// zero, far outside any scene.
+    fn unit(self, _: Token) -> Option<Self> {
         Some(self.normalize_or_zero()).filter(|unit| *unit != DVec3::ZERO)
     }
-    fn finite(self) -> bool {
+    fn finite(self, _: Token) -> bool {
         self.is_finite()
     }
-    fn dot_with(self, other: Self) -> f64 {
+    fn dot_with(self, other: Self, _: Token) -> f64 {
         self.dot(other)
     }
-    fn magnitude(s: f64) -> f64 {
+    fn magnitude(s: f64, _: Token) -> f64 {
         s.abs()
     }
-    const ZERO: Self = DVec3::ZERO;
+    fn zero(_: Token) -> Self {
+        DVec3::ZERO
+    }
 }
 
 /// The lit-side rule at one fragment. `normal` is the interpolated vertex normal (any length, any
@@ -137,14 +148,15 @@ pub fn lit_side_cosines<V: LitSideVector>(
         ("to_light", to_light),
         ("to_eye", to_eye),
     ] {
-        if !v.finite() {
+        if !v.finite(Token(())) {
             return Err(NormalsError::NonFiniteVector { what });
         }
     }
+    let token = Token(());
     let zero = V::Scalar::default();
-    let light = to_light.unit().unwrap_or(V::ZERO);
-    let eye = to_eye.unit().unwrap_or(V::ZERO);
-    let Some(normal) = normal.unit() else {
+    let light = to_light.unit(token).unwrap_or(V::zero(token));
+    let eye = to_eye.unit(token).unwrap_or(V::zero(token));
+    let Some(normal) = normal.unit(token) else {
         return Ok(LitSide {
             mu0: zero,
             mu: zero,
@@ -152,17 +164,17 @@ pub fn lit_side_cosines<V: LitSideVector>(
         });
     };
     // Re-orient at the fragment: interpolation may have carried the normal past the terminator.
-    let normal = if normal.dot_with(light) < zero {
+    let normal = if normal.dot_with(light, token) < zero {
         -normal
     } else {
         normal
     };
     // After the flip the dot is ≥ 0 or −0; the magnitude only turns −0 into +0.
-    let mu0 = V::magnitude(normal.dot_with(light));
-    let signed_mu = normal.dot_with(eye);
+    let mu0 = V::magnitude(normal.dot_with(light, token), token);
+    let signed_mu = normal.dot_with(eye, token);
     Ok(LitSide {
         mu0,
-        mu: V::magnitude(signed_mu),
+        mu: V::magnitude(signed_mu, token),
         face: if signed_mu >= zero {
             Face::Lit
         } else {

@@ -230,3 +230,41 @@ fn interpolated_normals_crossing_the_terminator_keep_mu0_nonnegative_and_continu
         "the configuration no longer exercises the terminator"
     );
 }
+
+/// The rule in `f64` (CPU references): the same face as in `f32` and the cosines within `f32`'s
+/// rounding of them, on the plain cases, a flipped normal, the defined degenerate cases and bad input.
+#[test]
+fn the_f64_rule_agrees_with_the_f32_rule() {
+    use glam::DVec3;
+    let cases = [
+        (Vec3::Z, Vec3::new(0.0, 0.6, 0.8), Vec3::new(0.8, 0.0, 0.6)),
+        (Vec3::Z, Vec3::new(0.0, 0.6, 0.8), Vec3::new(0.8, 0.0, -0.6)),
+        (
+            -3.0 * Vec3::Z,
+            Vec3::new(0.1, -2.0, 0.3),
+            Vec3::new(-1.0, 0.5, 4.0),
+        ),
+        (
+            Vec3::new(0.3, -0.2, 0.9),
+            Vec3::new(-1.0, 0.5, -0.2),
+            Vec3::new(0.2, 0.1, -3.0),
+        ),
+        (Vec3::ZERO, Vec3::Z, Vec3::Z),
+        (Vec3::Z, Vec3::ZERO, -Vec3::Z),
+        (Vec3::Z, Vec3::Z, Vec3::ZERO),
+    ];
+    for (normal, to_light, to_eye) in cases {
+        let single = lit_side_cosines(normal, to_light, to_eye).unwrap();
+        let double =
+            lit_side_cosines(normal.as_dvec3(), to_light.as_dvec3(), to_eye.as_dvec3()).unwrap();
+        assert_eq!(single.face, double.face, "{normal} {to_light} {to_eye}");
+        // A few f32 ulps: the f32 rule rounds each normalisation and dot product.
+        for (f32_value, f64_value) in [(single.mu0, double.mu0), (single.mu, double.mu)] {
+            assert!((f64::from(f32_value) - f64_value).abs() <= 4.0 * f64::from(f32::EPSILON));
+        }
+    }
+    assert!(matches!(
+        lit_side_cosines(DVec3::new(f64::NAN, 0.0, 1.0), DVec3::Z, DVec3::Z),
+        Err(NormalsError::NonFiniteVector { what: "normal" })
+    ));
+}

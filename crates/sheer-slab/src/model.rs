@@ -320,7 +320,7 @@ impl SlabShading {
     }
 }
 
-/// Eq. (4) on the lit face (`Front`), eq. (5) on the far face (`Back`): the single-scattered radiance on
+/// Eq. (4) on the lit face (`Face::Lit`), eq. (5) on the far face (`Face::Far`): the single-scattered radiance on
 /// the face the eye is on, per unit irradiance normal to the beam (sr⁻¹).
 pub(crate) fn single_scattered_radiance(
     side: Face,

@@ -1,21 +1,17 @@
-//! Position-based integrators: PBD (Müller, Heidelberger, Hennix & Ratcliff 2007), XPBD (Macklin,
-//! Müller & Chentanez 2016) and small-steps XPBD (Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke &
-//! Müller 2019) — one loop, three settings.
+//! A grid's position-based sub-step (PBD, XPBD, small-steps XPBD) through the fast paths: the plain
+//! sub-step of [`crate::solver`] (forces, predict, project batch by batch, velocities), laid out for
+//! the machine, with the same bits.
 //!
-//! Per sub-step: external forces into velocities, predict positions, project the distance
-//! constraints batch by batch (Gauss–Seidel across batches, independent within a batch, so a batch
-//! can run in parallel with the same result), then velocities from the position change. The batches
-//! are a grid's row strips ([`GridConstraints`]) or, for any other mesh, a greedy colouring. On a
-//! grid the batches along rows share a pass over the rows with the forces and the prediction before
-//! them, or with the attachments and the velocities after them; a large grid runs its whole
-//! sub-step (wind, prediction, every batch) in one pass, as a wavefront down the rows
-//! ([`Wavefront`]), and a whole step's sub-steps several to a pass, or on a team as a chain of such
-//! passes on its threads ([`Wavefront::run_link`]). In parallel, a grid's passes go to the
-//! simulation's team of threads ([`parts`]), a mesh's to rayon; on a team that splits its passes in
-//! equal parts (a cloth below 43 008 particles a thread), a grid's whole sub-step, or whole step,
-//! is one hand-off, each thread on its own rows ([`Pipeline`]).
+//! The batches are the grid's row strips ([`GridConstraints`]). The batches along rows share a pass
+//! over the rows with the forces and the prediction before them, or with the attachments and the
+//! velocities after them; a large grid runs its whole sub-step (wind, prediction, every batch) in one
+//! pass, as a wavefront down the rows ([`Wavefront`]), and a whole step's sub-steps several to a pass,
+//! or on a team as a chain of such passes on its threads ([`Wavefront::run_link`]). In parallel the
+//! passes go to the simulation's team of threads ([`parts`]); on a team that splits its passes in
+//! equal parts (a cloth below 43 008 particles a thread), the whole sub-step, or whole step, is one
+//! hand-off, each thread on its own rows ([`Pipeline`]).
 //!
-//! Throughout a step the state is split by component (`Simulation::split_positions`, …;
+//! Throughout a grid's step the state is split by component (`Simulation::split_positions`, …;
 //! `components.rs`): every loop here reads and writes x, y and z as three plain arrays.
 
 use glam::DVec3;
@@ -600,7 +596,7 @@ impl Simulation {
     ) -> bool {
         let parallel = self.parallel();
         // A switched-off family (stiffness 0) has every inverse divisor 0, so its constraints move
-        // nothing (`grid_constraints::project`); its batches are skipped rather than computed to no
+        // nothing (`solver::project`); its batches are skipped rather than computed to no
         // effect, so that switching a part of the model off saves its cost (the plain code projects
         // them: same bits, tested in `solver.rs`).
         let active: [bool; 3] = std::array::from_fn(|f| self.family[f].0 != 0.0);

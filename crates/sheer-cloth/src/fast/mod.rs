@@ -1,6 +1,7 @@
 //! The fast paths of a grid's position-based step: the same arithmetic as [`crate::solver`]'s plain
 //! sub-step, in the same order for every particle, laid out for the machine. The tests in `solver.rs`
-//! hold every one of them to the plain code's bits.
+//! hold the schedules a step picks to the plain code's bits, and the schedule tests in `grid_step.rs`
+//! hold every schedule a test can force to pass by pass.
 //!
 //! - [`grid_step`]: the sub-step on the state split by component, the grid's constraints in row
 //!   strips, and the choice of schedule — pass by pass, the pipeline of a team of threads, or
@@ -10,18 +11,26 @@
 //! - [`wavefront`], [`pipeline`], [`parallel`]: the schedules and the team of threads they run on;
 //! - [`components`], [`staggered`], [`vectorise`]: the split state, its allocation and the CPU dispatch.
 //!
-//! All of sheer-cloth's `unsafe` lives here, each block with a `// SAFETY:` comment: parallel passes
-//! write disjoint parts of one buffer (a colouring or a partition guarantees no index is touched by two
-//! threads at once), and the AVX-512 strips use raw-pointer loads and stores.
+//! All of sheer-cloth's `unsafe` lives in the modules here that allow it (and in the CPU-dispatch blocks
+//! [`vectorise::by_cpu`] expands), each block with a `// SAFETY:` comment: parallel passes write
+//! disjoint parts of one buffer (a partition of the rows or particles, and a batch's constraints sharing
+//! no particle, guarantee no index is touched by two threads at once), and the AVX-512 strips use
+//! raw-pointer loads and stores.
 
+#[allow(unsafe_code)]
 pub(crate) mod components;
+#[allow(unsafe_code)]
 pub(crate) mod grid_constraints;
+#[allow(unsafe_code)]
 pub(crate) mod grid_step;
+#[allow(unsafe_code)]
 pub(crate) mod grid_wind;
+#[allow(unsafe_code)]
 pub(crate) mod parallel;
 pub(crate) mod pipeline;
 pub(crate) mod staggered;
 #[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
 pub(crate) mod strips_avx512;
 pub(crate) mod vectorise;
 pub(crate) mod wavefront;

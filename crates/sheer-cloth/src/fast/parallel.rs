@@ -465,8 +465,8 @@ where
 
 /// A slice that several threads write at disjoint indices.
 ///
-/// Constraint batches come from a graph colouring in which no two constraints of one colour share a
-/// particle, so the threads of one batch never touch the same element.
+/// The threads of one pass own disjoint rows or parts of the cloth, and the constraints of one strip
+/// batch share no particle, so no two threads touch the same element.
 pub(crate) struct DisjointSlice<'a, T> {
     ptr: *mut T,
     len: usize,
@@ -474,7 +474,7 @@ pub(crate) struct DisjointSlice<'a, T> {
 }
 
 // SAFETY: access goes through `get`/`set`, whose callers guarantee that no index is touched by two threads
-// at once (the colouring invariant, checked when the colouring is built).
+// at once (each pass's partition of the rows or particles, and each batch's constraints sharing no particle).
 unsafe impl<T: Send> Send for DisjointSlice<'_, T> {}
 // SAFETY: as for `Send`: shared access is only through `get`/`set` on indices no other thread touches.
 unsafe impl<T: Send> Sync for DisjointSlice<'_, T> {}

@@ -17,7 +17,7 @@
 //! 63 of every shear strip of the default flag) as one masked block, and a run of strips (a batch, or a
 //! batch's rows) goes in one call, through the whole cloth's arrays ([`project_apart_strips`]).
 //!
-//! The arithmetic ([`solve`]) is that of [`project`](crate::fast::grid_constraints::project), operation for
+//! The arithmetic ([`solve`]) is that of [`project`](crate::solver::project), operation for
 //! operation and without fused multiply–adds, so the results are the same bits (tested against it and
 //! against the loops in `strip_loops_match_the_one_constraint_projection_bit_for_bit`,
 //! `along_strips_of_every_length_match_the_loop_and_touch_nothing_beyond` and
@@ -324,7 +324,7 @@ struct Constraints {
     count: usize,
 }
 
-/// The arithmetic of [`project`](crate::fast::grid_constraints::project) on eight constraints at once: the
+/// The arithmetic of [`project`](crate::solver::project) on eight constraints at once: the
 /// ends `[a, b]` (x, y and z each), their start positions (read only when `DAMPED`) and inverse masses;
 /// returns the ends moved. Operation for operation the scalar function's, without fused multiply–adds.
 ///

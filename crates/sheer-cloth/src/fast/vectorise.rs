@@ -16,7 +16,7 @@ macro_rules! by_cpu {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
             fn body $(<$(const $g: $gt),*>)? ($($arg: $ty),*) $(-> $ret)? $body
-            // The one place outside the unsafe modules (see lib.rs) where this crate calls unsafe code.
+            // The one place outside `fast`'s unsafe modules where this crate calls unsafe code.
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
             {

@@ -27,7 +27,7 @@
 //! schedule too: each sub-step then runs its own depth of rows behind the one before, and a row is
 //! read from memory once for all of them (`Simulation::pipelined_step`). The order above covers what
 //! items touch through their rows; what they share otherwise (the attachments' buffers of the pins'
-//! positions) is checked on the schedule where it is used (`position_based.rs`), except for opposed
+//! positions) is checked on the schedule where it is used (`grid_step.rs`), except for opposed
 //! parts (below), which the solver uses only where every attachment reads its own row's pins, so
 //! that the buffers follow the rows' order.
 //!

@@ -43,8 +43,7 @@ pub use slab_renderer::{
 };
 /// The CPU references the tests check the GPU against (the `f64` model at a point, with and without
 /// the light's transmission through the layers in front; the texture samplers the shaders mirror; the
-/// shadow ray caster) and the GPU-test switch: for this crate's and the workspace's tests, behind the
-/// `test-support` feature.
+/// shadow ray caster) and the GPU-test switch: for tests, behind the `test-support` feature.
 #[cfg(feature = "test-support")]
 pub use {
     cpu::{albedo_at, f16_bits_to_f32, optical_thickness_at, slab_values_at, slab_values_lit_by},
