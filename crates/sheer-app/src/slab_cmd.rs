@@ -38,20 +38,15 @@ pub fn run(args: &SlabArgs) -> Result<(), CliError> {
     } else {
         IrradianceConvention::NormalToBeam
     };
-    let scattering = match (args.model, &args.table) {
-        (ScatteringOrders::Single, Some(_)) => {
-            return Err(CliError::new(
-                "--table is used only with --model all-orders",
-            ));
-        }
-        (ScatteringOrders::Single, None) => Scattering::Single,
-        (ScatteringOrders::All, Some(path)) => Scattering::AllOrders(
-            load_all_orders_table(path).map_err(|e| CliError::new(e.to_string()))?,
-        ),
-        (ScatteringOrders::All, None) => {
-            Scattering::AllOrders(crate::frame::builtin_all_orders_table()?)
-        }
-    };
+    if args.model == ScatteringOrders::Single && args.table.is_some() {
+        return Err(CliError::new(
+            "--table is used only with --model all-orders",
+        ));
+    }
+    let scattering = Scattering::with_orders(args.model, || match &args.table {
+        Some(path) => load_all_orders_table(path).map_err(|e| CliError::new(e.to_string())),
+        None => crate::frame::builtin_all_orders_table(),
+    })?;
     let input: Box<dyn BufRead> = match &args.input {
         Some(path) => {
             Box::new(BufReader::new(std::fs::File::open(path).map_err(|e| {

@@ -517,20 +517,15 @@ impl Simulation {
         // Position-based methods on a grid run their sub-steps on a team of rayon's thread count, or
         // fewer on a grid of few rows (`TeamSlot`, `TEAM_ROWS_PER_THREAD`): eleven short passes per
         // sub-step on a grid, too short for rayon's hand-off.
+        // The position-based methods on a grid work on the state split by component from here to the end
+        // of the step (`components.rs`); on a general mesh they step the joined state (`solver.rs`).
+        let split = path == Path::Fast && self.steps_split();
         let team_threads = match self.grid {
-            Some(grid)
-                if path == Path::Fast
-                    && self.parallel()
-                    && self.grid_constraints.is_some()
-                    && self.params.method.is_position_based() =>
-            {
+            Some(grid) if split && self.parallel() => {
                 team_threads_for_rows(rayon::current_num_threads(), grid.rows)
             }
             _ => 1,
         };
-        // The position-based methods on a grid work on the state split by component from here to the end
-        // of the step (`components.rs`); on a general mesh they step the joined state (`solver.rs`).
-        let split = path == Path::Fast && self.steps_split();
         if split {
             self.split_positions.split_from(&self.positions);
             self.split_velocities.split_from(&self.velocities);

@@ -414,13 +414,23 @@ pub(crate) struct PackedConstraint {
     pub family: u8,
 }
 
+/// Where the tests move a flag's pins in frame `frame`: turning about the pole, which leaves them where
+/// they are, and swaying, which moves them (and so gives them a velocity in every sub-step).
+#[cfg(test)]
+pub(crate) fn hoist_sway_and_turn(frame: usize) -> glam::DAffine3 {
+    let sway = DVec3::new(0.01, 0.0, 0.02) * (0.5 * frame as f64).sin();
+    glam::DAffine3::from_translation(sway) * glam::DAffine3::from_rotation_y(0.01 * frame as f64)
+}
+
 #[cfg(test)]
 mod tests {
-    use glam::{DAffine3, DVec3};
+    use glam::DVec3;
 
     use crate::model::{ClothModel, GridSpec};
     use crate::params::{Collider, Method, SimParams, SpringParams};
     use crate::sim::{Path, Simulation};
+
+    use super::hoist_sway_and_turn;
 
     /// `frames` 60 Hz frames of `sim` through `path` on a pool of `threads` threads, the hoist swaying and
     /// turning a little every frame (so the pins move within every sub-step); the bits of the positions
@@ -438,10 +448,7 @@ mod tests {
         pool.install(|| {
             (0..frames)
                 .map(|frame| {
-                    let sway = DVec3::new(0.01, 0.0, 0.02) * (0.5 * frame as f64).sin();
-                    let turn = DAffine3::from_translation(sway)
-                        * DAffine3::from_rotation_y(0.01 * frame as f64);
-                    sim.move_pins(turn).unwrap();
+                    sim.move_pins(hoist_sway_and_turn(frame)).unwrap();
                     sim.step_through(1.0 / 60.0, path).unwrap();
                     let state = sim.positions().iter().chain(sim.velocities());
                     state.map(|v| v.to_array().map(f64::to_bits)).collect()

@@ -1608,12 +1608,8 @@ mod tests {
             .unwrap();
         pool.install(|| {
             for frame in 0..frames {
-                // Turning about the pole, which leaves the pins where they are, and swaying, which moves
-                // them (and so gives them a velocity in every sub-step).
-                let sway = DVec3::new(0.01, 0.0, 0.02) * (0.5 * frame as f64).sin();
-                let turn = glam::DAffine3::from_translation(sway)
-                    * glam::DAffine3::from_rotation_y(0.01 * frame as f64);
-                sim.move_pins(turn).unwrap();
+                sim.move_pins(crate::solver::hoist_sway_and_turn(frame))
+                    .unwrap();
                 sim.step(1.0 / 60.0).unwrap();
             }
         });
