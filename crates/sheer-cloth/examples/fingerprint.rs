@@ -18,7 +18,7 @@
 //! version of the library.
 //!
 //! `cargo run -p sheer-cloth --release --example fingerprint -- threads 1,2,4,8,16` runs nine cases
-//! (teams in equal parts, claimed opposed parts, chains and parts, the triangle path; small-steps
+//! (teams in equal parts, claimed opposed parts and parts, the triangle path; small-steps
 //! XPBD, XPBD with multipliers and PBD) on each of those thread counts and exits non-zero unless
 //! every case gave the same bits on all of them: the determinism check for a machine with more cores
 //! than the build machine's two, on which the tests run up to 16 threads.
@@ -150,8 +150,8 @@ fn parse_case(grid: &str, count: &str, frames: &str) -> Option<((usize, usize), 
 /// On two threads the cases take these ways of sharing out a step: a team in equal parts (the
 /// default flag, and 288 × 288, below 43 008 particles a thread), claimed passes of two opposed
 /// parts (362 × 362) and of wavefronts in parts (1 024 × 745), and the general triangle path; for
-/// small-steps XPBD, XPBD with multipliers and PBD. On three, 362 × 362 goes as a chain of
-/// wavefronts. Not the sub-step-by-sub-step wavefront of 262 144 particles and more. More threads
+/// small-steps XPBD, XPBD with multipliers and PBD. On three, 362 × 362 goes as wavefronts in
+/// parts. Not the sub-step-by-sub-step wavefront of 262 144 particles and more. More threads
 /// keep their own rows on larger grids (362 × 362 from four, 1 024 × 745 from eighteen).
 fn same_bits_on_thread_counts(counts: &[usize]) -> bool {
     let small_steps = Method::SmallStepsXpbd { substeps: 20 };

@@ -13,8 +13,8 @@ use crate::collision::Contacts;
 use crate::error::{DivergenceReason, ModelError, ParamError, StepError};
 use crate::fast::components::Xyz;
 use crate::fast::grid_constraints::GridConstraints;
-use crate::fast::grid_step::PlanCache;
 use crate::fast::grid_step::anchor_run_ends;
+use crate::fast::grid_step::{GridSweep, PlanCache, Schedule};
 use crate::fast::grid_wind::{
     BodyForce, SplitShares, add_grid_triangle_forces, grid_triangle_forces,
 };
@@ -146,8 +146,9 @@ pub(crate) fn team_claims_its_passes(particles: usize, threads: usize) -> bool {
 /// them, or the plain code of `solver.rs` for every cloth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Path {
-    /// The fast paths on a grid; a general mesh steps through the plain code.
-    Fast,
+    /// The fast paths on a grid, in the schedule the sweep asks for ([`GridSweep::Auto`] in
+    /// production); a general mesh steps through the plain code.
+    Fast(GridSweep),
     /// The plain code on every cloth: the tests' reference (production never asks for it).
     #[cfg_attr(not(test), allow(dead_code))]
     Plain,
@@ -192,7 +193,7 @@ pub struct Simulation {
     /// ahead of a row's attachments the pins' positions must be known.
     pub(crate) tether_row_reach: usize,
     /// Scratch: where each pinned particle is, in `pinned_indices` order, read by the attachments; twice
-    /// over, one copy per sub-step parity (a whole step in passes, `Simulation::pipelined_step`).
+    /// over, one copy per sub-step parity (a whole step in passes, `Simulation::whole_step`).
     pub(crate) tether_pin_positions: Vec<DVec3>,
     /// Where each pinned particle (in `pinned_indices` order) must be at the end of the next step.
     pub(crate) pin_targets: Vec<DVec3>,
@@ -233,13 +234,6 @@ pub struct Simulation {
     /// Grids: the constraints in row strips, which the position-based solvers project instead of the
     /// colour batches.
     pub(crate) grid_constraints: Option<GridConstraints>,
-    /// How a grid's position-based sub-step orders its batches (tests pick one; the solver picks by size).
-    pub(crate) grid_sweep: GridSweep,
-    /// How many sub-steps each pass of the last whole step's wavefront ran at most (0: the last step ran
-    /// none): for the tests to know what they compared.
-    pub(crate) wavefront_substeps_per_pass: usize,
-    /// How those wavefronts shared out the rows among the threads (`None`: the last step ran none).
-    pub(crate) wavefront_way: Option<crate::fast::grid_step::PassesGo>,
     /// Whether the next pass of two opposed parts sweeps part 0 upwards: they turn round every pass,
     /// from step to step too, so that each pass starts on the rows the one before ended on.
     pub(crate) opposed_upward_first: bool,
@@ -256,48 +250,6 @@ pub(crate) struct RowForces {
     /// The shares are due to be renewed this sub-step, with these parameters and this air velocity
     /// (m/s), before the rows read them.
     pub renew: Option<(Wind, DVec3)>,
-}
-
-/// The order in which a grid's position-based sub-step runs its batches. Every choice gives the same bits.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(not(test), allow(dead_code))] // the fixed orders are the tests'
-pub(crate) enum GridSweep {
-    /// On a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread), the
-    /// pipeline: a whole step, or sub-step by sub-step, as one hand-off. Else a whole step as
-    /// wavefronts of several sub-steps a pass from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (as many a
-    /// pass as `WAVEFRONT_WINDOW_BYTES` holds; on a team, where passes in parts fit but hold fewer
-    /// sub-steps than that, as two parts sweeping opposite ways on a team of two threads whose
-    /// attachments read their own rows' pins, else as a chain of them where its links hold more
-    /// sub-steps than passes in parts would), a sub-step
-    /// as one wavefront from `WAVEFRONT_MIN_PARTICLES` (on several threads only with enough rows
-    /// per thread for the seams: `…_ROWS_PER_DEPTH` times the depth); else pass by pass.
-    #[default]
-    Auto,
-    /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
-    Passes,
-    /// A pass over the cloth per batch, the batches along rows too.
-    BatchByBatch,
-    /// The one-pass wavefront in this many parts ([`Wavefront`](crate::fast::wavefront::Wavefront)), if they
-    /// fit; a whole step's sub-steps up to `substeps_per_pass` a pass (fewer where they do not fit),
-    /// or with 0 each sub-step on its own.
-    Wavefront {
-        parts: usize,
-        substeps_per_pass: usize,
-    },
-    /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
-    /// ([`Pipeline`](crate::fast::pipeline::Pipeline)); it must fit.
-    Pipeline,
-    /// On a team of threads (it must have one), a whole step as a chain of wavefronts
-    /// ([`Wavefront::run_link`](crate::fast::wavefront::Wavefront::run_link)), links of `substeps_per_link`
-    /// sub-steps (the last may have fewer), link `k` on thread `k mod threads`; sub-step by sub-step
-    /// pass by pass where a whole step cannot go in wavefronts.
-    Chain { substeps_per_link: usize },
-    /// On a team of two threads (it must have one), a whole step's passes of up to
-    /// `substeps_per_pass` sub-steps each as two parts sweeping opposite ways
-    /// ([`Wavefront::opposed_parts`](crate::fast::wavefront::Wavefront::opposed_parts)); sub-step by
-    /// sub-step pass by pass where a whole step cannot go in wavefronts, or where the attachments
-    /// read pins of other rows.
-    Opposed { substeps_per_pass: usize },
 }
 
 pub(crate) fn family_index(kind: SpringKind) -> usize {
@@ -437,9 +389,6 @@ impl Simulation {
             grid_constraints: model
                 .grid
                 .and_then(|shape| GridConstraints::new(shape, &model.springs)),
-            grid_sweep: GridSweep::Auto,
-            wavefront_substeps_per_pass: 0,
-            wavefront_way: None,
             opposed_upward_first: false,
             grid_triangulation,
             grid: model.grid,
@@ -492,12 +441,19 @@ impl Simulation {
     /// On divergence (a non-finite value, a speed or a strain beyond [`DivergenceLimits`](crate::DivergenceLimits))
     /// the step is undone and [`StepError::Diverged`] returned: the state stays the last good one.
     pub fn step(&mut self, dt: f64) -> Result<StepInfo, StepError> {
-        self.step_through(dt, Path::Fast)
+        let (info, _) = self.step_through(dt, Path::Fast(GridSweep::Auto))?;
+        Ok(info)
     }
 
     /// [`step`](Simulation::step) through the fast paths where the cloth has them (`Path::Fast`), or
-    /// through the plain code everywhere (`Path::Plain`, which the fast paths are tested against).
-    pub(crate) fn step_through(&mut self, dt: f64, path: Path) -> Result<StepInfo, StepError> {
+    /// through the plain code everywhere (`Path::Plain`, which the fast paths are tested against);
+    /// with the schedule of a grid's step where it went whole
+    /// ([`whole_step`](Simulation::whole_step)), for the tests to know what they compared.
+    pub(crate) fn step_through(
+        &mut self,
+        dt: f64,
+        path: Path,
+    ) -> Result<(StepInfo, Option<Schedule>), StepError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(StepError::InvalidTimeStep(dt));
         }
@@ -519,7 +475,11 @@ impl Simulation {
         // sub-step on a grid, too short for rayon's hand-off.
         // The position-based methods on a grid work on the state split by component from here to the end
         // of the step (`components.rs`); on a general mesh they step the joined state (`solver.rs`).
-        let split = path == Path::Fast && self.steps_split();
+        let sweep = match path {
+            Path::Fast(sweep) if self.steps_split() => Some(sweep),
+            _ => None,
+        };
+        let split = sweep.is_some();
         let team_threads = match self.grid {
             Some(grid) if split && self.parallel() => {
                 team_threads_for_rows(rayon::current_num_threads(), grid.rows)
@@ -535,12 +495,12 @@ impl Simulation {
         // enough for that to pay (measured: `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`); beyond that the
         // team's passes are claimed chunk by chunk, since one core may run slower than the other.
         let claim = team_claims_its_passes(self.positions.len(), team_threads);
-        let divergence = team.lead(team_threads, claim, || {
+        let (divergence, whole) = team.lead(team_threads, claim, || {
             // A grid's position-based step as one pass of the team, or as wavefronts of several
             // sub-steps, where it can go so; else (and always for the other methods) sub-step by
             // sub-step.
-            let whole = split && self.pipelined_step(h, self.time, substeps);
-            for s in (0..substeps).filter(|_| !whole) {
+            let whole = sweep.and_then(|sweep| self.whole_step(h, self.time, substeps, sweep));
+            for s in (0..substeps).filter(|_| whole.is_none()) {
                 let t = self.time + s as f64 * h;
                 // `wind.renewal_interval` > 0: the held aerodynamic forces are renewed at the first
                 // force evaluation of every k-th sub-step (0 renews them at every evaluation).
@@ -566,11 +526,11 @@ impl Simulation {
                         iterations,
                         stiffness,
                         ..
-                    } => self.position_based(split, h, t, iterations, Some(stiffness)),
+                    } => self.position_based(sweep, h, t, iterations, Some(stiffness)),
                     Method::Xpbd { iterations, .. } => {
-                        self.position_based(split, h, t, iterations, None)
+                        self.position_based(sweep, h, t, iterations, None)
                     }
-                    Method::SmallStepsXpbd { .. } => self.position_based(split, h, t, 1, None),
+                    Method::SmallStepsXpbd { .. } => self.position_based(sweep, h, t, 1, None),
                 }
                 if self.params.collisions.any() {
                     self.project_contacts(h, split);
@@ -580,7 +540,7 @@ impl Simulation {
             if split {
                 self.join_split_state();
             }
-            self.divergence()
+            (self.divergence(), whole)
         });
         self.team = team;
         if let Some(reason) = divergence {
@@ -594,7 +554,7 @@ impl Simulation {
         }
         self.time += dt;
         self.step_count += 1;
-        Ok(info)
+        Ok((info, whole))
     }
 
     /// Where pinned particle `k` is after `fraction` of the current step (linear in time).
@@ -607,10 +567,18 @@ impl Simulation {
         self.params.method.is_position_based() && self.grid_constraints.is_some()
     }
 
-    /// One position-based sub-step: on a grid's split state through the fast paths, else plain.
-    fn position_based(&mut self, split: bool, h: f64, t: f64, iterations: u32, pbd: Option<f64>) {
-        if split {
-            self.position_based_substep(h, t, iterations, pbd);
+    /// One position-based sub-step: on a grid's split state through the fast paths in the schedule
+    /// `sweep` asks for, else plain.
+    fn position_based(
+        &mut self,
+        sweep: Option<GridSweep>,
+        h: f64,
+        t: f64,
+        iterations: u32,
+        pbd: Option<f64>,
+    ) {
+        if let Some(sweep) = sweep {
+            self.position_based_substep(h, t, iterations, pbd, sweep);
         } else {
             self.plain_position_based_substep(h, t, iterations, pbd);
         }

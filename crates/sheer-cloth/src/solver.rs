@@ -426,6 +426,7 @@ pub(crate) fn hoist_sway_and_turn(frame: usize) -> glam::DAffine3 {
 mod tests {
     use glam::DVec3;
 
+    use crate::fast::grid_step::GridSweep;
     use crate::model::{ClothModel, GridSpec};
     use crate::params::{Collider, Method, SimParams, SpringParams};
     use crate::sim::{Path, Simulation};
@@ -488,7 +489,7 @@ mod tests {
         case: &str,
     ) {
         let plain = bits_per_frame(sim.clone(), Path::Plain, 1, frames);
-        let fast = bits_per_frame(sim, Path::Fast, threads, frames);
+        let fast = bits_per_frame(sim, Path::Fast(GridSweep::Auto), threads, frames);
         for (frame, (fast, plain)) in fast.iter().zip(&plain).enumerate() {
             assert!(
                 fast == plain,

@@ -6,10 +6,11 @@
 //! over the rows with the forces and the prediction before them, or with the attachments and the
 //! velocities after them; a large grid runs its whole sub-step (wind, prediction, every batch) in one
 //! pass, as a wavefront down the rows ([`Wavefront`]), and a whole step's sub-steps several to a pass,
-//! or on a team as a chain of such passes on its threads ([`Wavefront::run_link`]). In parallel the
+//! and on a team of two as two opposed parts ([`Wavefront::opposed_parts`]). In parallel the
 //! passes go to the simulation's team of threads ([`parts`]); on a team that splits its passes in
 //! equal parts (a cloth below 43 008 particles a thread), the whole sub-step, or whole step, is one
-//! hand-off, each thread on its own rows ([`Pipeline`]).
+//! hand-off, each thread on its own rows ([`Pipeline`]). Which of these runs is decided in one
+//! place, [`Simulation::plan_grid_schedule`].
 //!
 //! Throughout a grid's step the state is split by component (`Simulation::split_positions`, …;
 //! `components.rs`): every loop here reads and writes x, y and z as three plain arrays.
@@ -31,7 +32,7 @@ use crate::fast::vectorise::by_cpu;
 use crate::fast::wavefront::Wavefront;
 use crate::params::SimParams;
 use crate::params::{Method, Wind};
-use crate::sim::{GridSweep, RowForces, Simulation, family_index};
+use crate::sim::{RowForces, Simulation, family_index};
 use crate::solver::FamilyConstants;
 use crate::solver::tethered;
 
@@ -64,17 +65,6 @@ const WAVEFRONT_WINDOW_BYTES: usize = 7 << 20;
 /// constraints' rest lengths and inverted divisors (96), its attachment (12).
 const SUBSTEP_BYTES_PER_PARTICLE: usize = 244;
 
-/// The sub-steps of each link of a chain of `substeps` sub-steps on `threads` threads, links of at
-/// most `most`: as few rounds of one link per thread as that allows, the sub-steps spread evenly over
-/// the links (the longer ones first), so that every thread runs about as many sub-steps.
-fn link_sizes(substeps: usize, most: usize, threads: usize) -> Vec<usize> {
-    let rounds = substeps.div_ceil(threads * most.max(1));
-    let links = (rounds * threads).min(substeps).max(1);
-    (0..links)
-        .map(|link| substeps / links + usize::from(link < substeps % links))
-        .collect()
-}
-
 /// How many of a step's `substeps` sub-steps one pass of the wavefront runs on a grid of `columns`
 /// columns, when a sub-step keeps `substep_depth` rows in flight: as many as fit
 /// [`WAVEFRONT_WINDOW_BYTES`], at least one. (With threads the seams bound it further.)
@@ -94,35 +84,34 @@ const PARTICLE_GRAIN: usize = 4096;
 
 impl Simulation {
     /// One sub-step of length `h` at time `t` on a grid: [`crate::solver`]'s sub-step through the fast
-    /// paths. `pbd_stiffness` selects PBD with that dimensionless stiffness; `None` selects XPBD with
-    /// compliance `1/k` from the springs.
+    /// paths, in the schedule `sweep` asks for ([`GridSweep::Auto`] in production). `pbd_stiffness`
+    /// selects PBD with that dimensionless stiffness; `None` selects XPBD with compliance `1/k` from
+    /// the springs.
     pub(crate) fn position_based_substep(
         &mut self,
         h: f64,
         t: f64,
         iterations: u32,
         pbd_stiffness: Option<f64>,
+        sweep: GridSweep,
     ) {
         // The rows sum their forces where they predict them (`project_grid_constraints`) when they can.
         let row_forces = self.prepare_row_forces(t);
-        let family_constants = self.solver_constants(h, iterations, pbd_stiffness);
+        let family = self.solver_constants(h, iterations, pbd_stiffness);
         let is_pbd = pbd_stiffness.is_some();
         // With one iteration every multiplier is used once, right after being reset: it is always 0 when
         // read, so small-steps XPBD skips the multipliers altogether (same arithmetic, same bits).
         let multipliers = iterations > 1 && !is_pbd;
         match (is_pbd, multipliers) {
             (true, _) => {
-                self.project_constraints::<true, false>(h, iterations, family_constants, row_forces)
+                self.project_constraints::<true, false>(h, iterations, family, row_forces, sweep)
             }
             (false, true) => {
-                self.project_constraints::<false, true>(h, iterations, family_constants, row_forces)
+                self.project_constraints::<false, true>(h, iterations, family, row_forces, sweep)
             }
-            (false, false) => self.project_constraints::<false, false>(
-                h,
-                iterations,
-                family_constants,
-                row_forces,
-            ),
+            (false, false) => {
+                self.project_constraints::<false, false>(h, iterations, family, row_forces, sweep)
+            }
         }
         self.cached_forces_valid = false;
     }
@@ -448,34 +437,34 @@ unsafe fn end_sweep(
 
 impl Simulation {
     /// Runs a whole step of `substeps` sub-steps of `h` (s) from time `time` (s) in passes over the
-    /// rows, with the pins prescribed and placed row by row inside them, and returns whether it
-    /// did: on a team in equal parts (below `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread) as
-    /// one pipelined pass of the team; else, from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as
-    /// wavefronts of several sub-steps a pass (on one thread, or on a team that claims its passes).
-    /// When it did not (a method with multipliers, a mesh, a small grid without a team in equal
-    /// parts, a cloth too short for its parts, attachments reaching too far for the prediction to
-    /// join the wavefront, …) nothing has changed and the caller steps sub-step by sub-step.
+    /// rows, with the pins prescribed and placed row by row inside them, as `sweep` asks
+    /// ([`GridSweep::Auto`] in production), and returns the schedule it ran
+    /// ([`plan_grid_schedule`](Simulation::plan_grid_schedule)): on a team in equal parts (below
+    /// `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD` a thread) as one pipelined pass of the team; else,
+    /// from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps a pass (on one
+    /// thread, or on a team that claims its passes). When it did not (a method with multipliers, a
+    /// mesh, a small grid without a team in equal parts, a cloth too short for its parts,
+    /// attachments reaching too far for the prediction to join the wavefront, …) nothing has
+    /// changed and the caller steps sub-step by sub-step.
     ///
     /// Sub-step by sub-step, each sub-step is one pass, ended by a barrier at which the leader waits for
     /// the helper, followed by the leader's serial work (the pins, the wind's renewal, the solver's
     /// set-up), during which the helper waits; on the default flag on two threads these took about
-    /// 3 µs of each 50 µs sub-step (`rdtsc` around the passes, a temporary instrumentation). In one pass
-    /// the sub-steps follow each other like the stages within one: a part waits for its neighbour only
-    /// where their rows meet. Same bits as sub-step by sub-step (tested).
+    /// 3 µs of each 50 µs sub-step. In one pass the sub-steps follow each other like the stages within
+    /// one: a part waits for its neighbour only where their rows meet. Same bits as sub-step by
+    /// sub-step (tested).
     ///
     /// A large grid's whole step goes as wavefronts instead ([`Wavefront`]), each pass running as many
     /// sub-steps one behind the other as keep the rows in flight within [`WAVEFRONT_WINDOW_BYTES`]:
     /// sub-step by sub-step, every sub-step streamed the whole cloth from memory once; with `k` sub-steps
-    /// a pass, once every `k` (same bits, tested). On a team
-    /// that claims its passes they go either in parts (the rows cut between the threads, the seams
-    /// around the cuts after them) or, where passes in parts fit but hold fewer sub-steps than one
-    /// thread's, the seams needing rows: on two threads as two opposed parts, each thread sweeping
-    /// its own half of the rows, one down and one up, and waiting for the other only across the cut
-    /// ([`Wavefront::opposed_parts`]); on more, as a chain, one
-    /// pass (*link*) per thread at a time, each following the one before down the rows
-    /// ([`Wavefront::run_link`]). Where no pass fits the
-    /// parts, sub-step by sub-step.
-    pub(crate) fn pipelined_step(&mut self, h: f64, time: f64, substeps: u32) -> bool {
+    /// a pass, once every `k` (same bits, tested).
+    pub(crate) fn whole_step(
+        &mut self,
+        h: f64,
+        time: f64,
+        substeps: u32,
+        sweep: GridSweep,
+    ) -> Option<Schedule> {
         let (iterations, pbd_stiffness) = match self.params.method {
             Method::Pbd {
                 iterations,
@@ -484,39 +473,22 @@ impl Simulation {
             } => (iterations, Some(stiffness)),
             Method::Xpbd { iterations, .. } => (iterations, None),
             Method::SmallStepsXpbd { .. } => (1, None),
-            _ => return false,
+            _ => return None,
         };
         let multipliers = iterations > 1 && pbd_stiffness.is_none();
-        let small = self.positions.len() < WHOLE_STEP_WAVEFRONT_MIN_PARTICLES;
-        // The step as one pass of a team in equal parts (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`);
-        // else, from `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES`, as wavefronts of several sub-steps.
-        let pipeline = self.parallel()
-            && team_in_equal_parts().is_some()
-            && matches!(self.grid_sweep, GridSweep::Pipeline | GridSweep::Auto);
-        let wavefront = match self.grid_sweep {
-            GridSweep::Wavefront {
-                substeps_per_pass, ..
-            } => substeps_per_pass > 0,
-            GridSweep::Chain { .. } | GridSweep::Opposed { .. } => true,
-            GridSweep::Auto => !small && !pipeline,
-            _ => false,
-        };
         // Contacts are projected between sub-steps (`Simulation::project_contacts`).
-        let eligible = !multipliers
-            && !self.params.collisions.any()
-            && self.grid_constraints.is_some()
-            && (pipeline || wavefront)
-            && !(self.wind_acts() && self.grid_triangulation.is_none());
-        self.wavefront_substeps_per_pass = 0;
-        self.wavefront_way = None;
-        if !eligible {
-            return false;
+        if multipliers
+            || self.params.collisions.any()
+            || self.grid_constraints.is_none()
+            || (self.wind_acts() && self.grid_triangulation.is_none())
+        {
+            return None;
         }
         // The wind's renewals, sub-step by sub-step as `Simulation::step` and `prepare_row_forces` make
-        // them; undone if the pass cannot run.
+        // them; undone if the step cannot go whole.
         let stale = self.wind_stale;
         let wind = self.params.wind;
-        let renewals = (0..substeps)
+        let renewals: Vec<_> = (0..substeps)
             .map(|s| {
                 if wind.renewal_due(s, h) {
                     self.wind_stale = true;
@@ -524,6 +496,12 @@ impl Simulation {
                 self.due_wind_renewal(time + s as f64 * h)
             })
             .collect();
+        let renewed: Vec<bool> = renewals.iter().map(Option::is_some).collect();
+        let schedule = self.plan_grid_schedule(sweep, iterations, &renewed, true);
+        if !matches!(schedule, Schedule::Pipeline | Schedule::Wavefronts(_)) {
+            self.wind_stale = stale;
+            return None;
+        }
         let step = WholeStep { renewals };
         let row_forces = RowForces {
             shares: self.wind_acts(),
@@ -532,68 +510,286 @@ impl Simulation {
         let family = self.solver_constants(h, iterations, pbd_stiffness);
         // The first sub-step's pins; the pass moves them on at the end of each sub-step.
         self.prescribe_pins(0, substeps, h, true);
-        let ran = if pbd_stiffness.is_some() {
+        if pbd_stiffness.is_some() {
             self.project_grid_constraints::<true, false>(
                 h,
                 iterations,
                 family,
                 Some(row_forces),
+                &schedule,
                 Some(&step),
-            )
+            );
         } else {
             self.project_grid_constraints::<false, false>(
                 h,
                 iterations,
                 family,
                 Some(row_forces),
+                &schedule,
                 Some(&step),
-            )
-        };
-        if ran {
-            self.cached_forces_valid = false;
-        } else {
-            self.wind_stale = stale;
+            );
         }
-        ran
+        self.cached_forces_valid = false;
+        Some(schedule)
     }
 
-    /// The constraint sweeps of a grid's sub-step of length `h` (s), with `row_forces`
-    /// ([`project_grid_constraints`](Simulation::project_grid_constraints)).
+    /// The constraint sweeps of a grid's sub-step of length `h` (s), with `row_forces`, in the schedule
+    /// `sweep` asks for ([`project_grid_constraints`](Simulation::project_grid_constraints)).
     fn project_constraints<const PBD: bool, const MULTIPLIERS: bool>(
         &mut self,
         h: f64,
         iterations: u32,
         family: [FamilyConstants; 3],
         row_forces: Option<RowForces>,
+        sweep: GridSweep,
     ) {
-        self.project_grid_constraints::<PBD, MULTIPLIERS>(h, iterations, family, row_forces, None);
+        let renewed = [row_forces.and_then(|r| r.renew).is_some()];
+        let schedule = self.plan_grid_schedule(sweep, iterations, &renewed, false);
+        self.project_grid_constraints::<PBD, MULTIPLIERS>(
+            h, iterations, family, row_forces, &schedule, None,
+        );
+    }
+
+    /// How a grid's sub-step (`whole_step` false, one entry in `renewed`), or a whole step of
+    /// `renewed.len()` sub-steps, goes, each sub-step `iterations` sweeps and `renewed[s]` saying
+    /// whether sub-step `s` renews the wind's shares. [`GridSweep::Auto`] decides by the cloth's size
+    /// and the team of threads leading the step (each threshold's constant says what it was measured
+    /// on):
+    ///
+    /// 1. Below `WAVEFRONT_MIN_PARTICLES` (a sub-step) or `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` (a whole
+    ///    step) the cloth stays in the caches from pass to pass: no wavefronts.
+    /// 2. On a team in equal parts (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`), the pipeline: one
+    ///    hand-off, each thread on its own rows.
+    /// 3. Else wavefronts, as many sub-steps a pass as `WAVEFRONT_WINDOW_BYTES` holds, cut into one part
+    ///    per thread where every part has room for its seams (`…_ROWS_PER_DEPTH` rows per row of
+    ///    depth); on a team of two whose attachments read their own rows' pins, as two opposed parts
+    ///    where those hold more sub-steps a pass than parts would.
+    /// 4. Else pass by pass ([`Schedule::Passes`]); a whole step then goes sub-step by sub-step.
+    ///
+    /// The other sweeps force a schedule, for the tests; one that cannot run a lone sub-step panics.
+    /// Only the pipeline's stages are kept, in `pipeline_plan`, built again when what they depend on
+    /// changed.
+    pub(crate) fn plan_grid_schedule(
+        &mut self,
+        sweep: GridSweep,
+        iterations: u32,
+        renewed: &[bool],
+        whole_step: bool,
+    ) -> Schedule {
+        let parallel = self.parallel();
+        let Simulation {
+            params,
+            inverse_masses,
+            tether_row_reach,
+            grid: Some(shape),
+            grid_constraints: Some(grid),
+            progress,
+            pipeline_plan,
+            ..
+        } = self
+        else {
+            unreachable!("a grid schedule for a simulation without grid constraints");
+        };
+        let (columns, rows) = (shape.columns, shape.rows);
+        let substep_count = renewed.len();
+        // A whole step's passes and a lone sub-step's wavefront pay from different sizes, and need
+        // different room for their seams.
+        let (wavefront_min_particles, rows_per_depth) = if whole_step {
+            (
+                WHOLE_STEP_WAVEFRONT_MIN_PARTICLES,
+                WHOLE_STEP_WAVEFRONT_ROWS_PER_DEPTH,
+            )
+        } else {
+            (WAVEFRONT_MIN_PARTICLES, WAVEFRONT_ROWS_PER_DEPTH)
+        };
+        // The team's threads where one leads (it may hold fewer than rayon's pool:
+        // `TEAM_ROWS_PER_THREAD`).
+        let threads = if parallel {
+            team_threads().unwrap_or_else(rayon::current_num_threads)
+        } else {
+            1
+        };
+        let equal_parts = if parallel {
+            team_in_equal_parts()
+        } else {
+            None
+        };
+        // Opposed parts sweep a whole step on a team of exactly two threads.
+        let team_of_two = whole_step && parallel && team_threads() == Some(2);
+        let wavefronts = 'plan: {
+            // Decided before the passes are built, so that a small cloth's sub-step builds none.
+            let (parts, forced_per_pass) = match sweep {
+                GridSweep::Passes | GridSweep::BatchByBatch | GridSweep::Pipeline => {
+                    break 'plan None;
+                }
+                GridSweep::Wavefront {
+                    substeps_per_pass: 0,
+                    ..
+                } if whole_step => break 'plan None,
+                GridSweep::Wavefront {
+                    parts,
+                    substeps_per_pass,
+                } => (parts, Some(substeps_per_pass)),
+                GridSweep::Opposed { .. } if !whole_step => break 'plan None,
+                GridSweep::Opposed { substeps_per_pass } => (2, Some(substeps_per_pass)),
+                GridSweep::Auto
+                    if inverse_masses.len() < wavefront_min_particles || equal_parts.is_some() =>
+                {
+                    break 'plan None;
+                }
+                GridSweep::Auto => (threads, None),
+            };
+            let reach = if params.long_range_attachments {
+                *tether_row_reach
+            } else {
+                0
+            };
+            // The items of sub-steps `substeps`, one after another.
+            let items_of = |substeps: Range<usize>| -> Vec<(WaveItem, usize)> {
+                substeps
+                    .flat_map(|s| {
+                        WaveItem::of_substep(s, renewed[s], &grid.by_last_row, iterations, reach)
+                    })
+                    .collect()
+            };
+            let one = items_of(0..1);
+            // A sub-step can follow another in the same pass only with its prediction among the items
+            // (its attachments' pins near enough).
+            if whole_step && !WaveItem::has_prediction(&one) {
+                break 'plan None;
+            }
+            let most = match forced_per_pass {
+                Some(per_pass) => per_pass.clamp(1, substep_count),
+                None => substeps_in_flight(
+                    columns,
+                    WaveItem::wavefront(&one, rows).depth() + 1,
+                    substep_count,
+                ),
+            };
+            // Passes of `per_pass` sub-steps each, the last pass fewer.
+            let passes_of = |per_pass: usize| -> Vec<(Wavefront, Vec<(WaveItem, usize)>)> {
+                (0..substep_count)
+                    .step_by(per_pass)
+                    .map(|first| {
+                        let items = items_of(first..(first + per_pass).min(substep_count));
+                        (WaveItem::wavefront(&items, rows), items)
+                    })
+                    .collect()
+            };
+            // Two parts sweeping opposite ways: each part's strips need the other's only across the
+            // cut, where the attachments would read the pins of rows across it too if they reached
+            // beyond their own row.
+            let opposed = |most: usize| WavefrontPlan {
+                passes: passes_of(most),
+                most_per_pass: most,
+                way: PassesGo::Opposed,
+            };
+            if let GridSweep::Opposed { .. } = sweep {
+                assert!(team_of_two, "opposed parts need a team of two threads");
+                break 'plan (reach == 0).then(|| opposed(most));
+            }
+            // In parts: as many sub-steps a pass as fit the parts, at most `most`.
+            let in_parts = (1..=most).rev().find_map(|per_pass| {
+                let passes = passes_of(per_pass);
+                let fit = passes.iter().all(|(plan, _)| {
+                    plan.fits(parts)
+                        && !(sweep == GridSweep::Auto
+                            && threads > 1
+                            && rows < rows_per_depth * threads * plan.depth())
+                });
+                fit.then_some(WavefrontPlan {
+                    passes,
+                    most_per_pass: per_pass,
+                    way: PassesGo::InParts(parts),
+                })
+            });
+            // On a team of two whose attachments read their own rows' pins, two parts sweeping
+            // opposite ways where their passes hold more sub-steps than passes in parts would: each
+            // thread keeps its own rows, as in parts, without seams to make room for.
+            if let (GridSweep::Auto, true, 0) = (sweep, team_of_two, reach)
+                && in_parts
+                    .as_ref()
+                    .is_some_and(|plan| most > plan.most_per_pass)
+            {
+                break 'plan Some(opposed(most));
+            }
+            // A test's fixed order: refusing it would let the test compare pass by pass with itself (a
+            // whole step that does not fit goes sub-step by sub-step, and is checked there).
+            if let (None, GridSweep::Wavefront { parts, .. }, false) =
+                (&in_parts, sweep, whole_step)
+            {
+                panic!("{parts} parts do not fit {rows} rows");
+            }
+            in_parts
+        };
+        if let Some(plan) = wavefronts {
+            return Schedule::Wavefronts(plan);
+        }
+        // The whole sub-step (or step) as one hand-off to a team whose threads each keep their own rows.
+        let parts = match (sweep, equal_parts) {
+            (GridSweep::BatchByBatch, _) => return Schedule::BatchByBatch,
+            (GridSweep::Pipeline | GridSweep::Auto, Some(parts)) => parts,
+            (GridSweep::Pipeline, None) if !whole_step => {
+                panic!("the pipeline needs a team in equal parts")
+            }
+            _ => return Schedule::Passes,
+        };
+        // The stages of the sub-step before serve unless one of the things they depend on changed.
+        let moves = progress.cuts_moved();
+        let current = pipeline_plan.key.as_ref().is_some_and(|key| {
+            key.0 == renewed && (key.1, key.2, key.3) == (iterations, parts, moves)
+        });
+        if !current {
+            pipeline_plan.plan = PipelineStages::new(
+                renewed,
+                &grid.strips,
+                &grid.by_last_row,
+                grid.middle_batches(),
+                iterations,
+                columns,
+                parts,
+                progress,
+            );
+            pipeline_plan.key = Some((renewed.to_vec(), iterations, parts, moves));
+        }
+        if sweep == GridSweep::Pipeline {
+            assert!(
+                pipeline_plan.plan.is_some(),
+                "{parts} parts do not fit {rows} rows"
+            );
+        }
+        if pipeline_plan.plan.is_some() {
+            Schedule::Pipeline
+        } else {
+            Schedule::Passes
+        }
     }
 
     /// A grid's sub-step after [`crate::solver`] (the plain code it must match bit for bit): strip by
     /// strip in its twelve batches ([`GridConstraints`]), the sub-step's wind shares (when due), forces
-    /// and prediction over `h` (s) first. The batches within rows that open and close a sweep (bending
-    /// and stretch along rows) share a pass over the rows with the per-particle work next to them (the
-    /// forces and the prediction; the attachments and the velocities): every row is independent there,
-    /// so each part of the team keeps its rows from one to the next, and a sub-step takes eleven passes
-    /// instead of sixteen, with the same arithmetic in the same order for every particle (tested). On a
-    /// team in equal parts the whole sub-step is one hand-off instead, each thread on its own rows
-    /// ([`Pipeline`]); a large grid runs the whole sub-step (the wind's shares, the forces and the
-    /// prediction, then every batch) in one pass, as a wavefront down the rows ([`Wavefront`],
-    /// [`WaveItem`]). Same bits either way, tested.
+    /// and prediction over `h` (s) first, in `schedule`. The batches within rows that open and close a
+    /// sweep (bending and stretch along rows) share a pass over the rows with the per-particle work
+    /// next to them (the forces and the prediction; the attachments and the velocities): every row is
+    /// independent there, so each part of the team keeps its rows from one to the next, and a sub-step
+    /// takes eleven passes instead of sixteen, with the same arithmetic in the same order for every
+    /// particle (tested). On a team in equal parts the whole sub-step is one hand-off instead, each
+    /// thread on its own rows ([`Pipeline`]); a large grid runs the whole sub-step (the wind's shares,
+    /// the forces and the prediction, then every batch) in one pass, as a wavefront down the rows
+    /// ([`Wavefront`], [`WaveItem`]). Same bits either way, tested.
     ///
     /// `row_forces` ([`Simulation::prepare_row_forces`]): `Some` when the prediction of each row sums
     /// the row's forces itself, `None` when they are in `self.forces` already. `step`: a whole step's
-    /// sub-steps instead of one ([`Simulation::pipelined_step`]), run as the pipeline's one pass or as
-    /// wavefronts of several sub-steps a pass. Returns whether it ran; only a whole step can be
-    /// refused, and then nothing has changed.
+    /// sub-steps instead of one ([`Simulation::whole_step`]), whose `schedule` is the pipeline or
+    /// wavefronts.
     fn project_grid_constraints<const PBD: bool, const MULTIPLIERS: bool>(
         &mut self,
         h: f64,
         iterations: u32,
         family: [FamilyConstants; 3],
         row_forces: Option<RowForces>,
+        schedule: &Schedule,
         step: Option<&WholeStep>,
-    ) -> bool {
+    ) {
         let parallel = self.parallel();
         // A switched-off family (stiffness 0) has every inverse divisor 0, so its constraints move
         // nothing (`solver::project`); its batches are skipped rather than computed to no
@@ -608,7 +804,6 @@ impl Simulation {
             tether_anchors,
             tether_lengths,
             tether_run_ends,
-            tether_row_reach,
             tether_pin_positions,
             pinned_indices,
             pin_starts,
@@ -619,11 +814,8 @@ impl Simulation {
             split_shares,
             grid: Some(shape),
             grid_constraints: Some(grid),
-            grid_sweep,
             progress,
             pipeline_plan,
-            wavefront_substeps_per_pass,
-            wavefront_way,
             opposed_upward_first,
             ..
         } = self
@@ -634,9 +826,8 @@ impl Simulation {
         let (columns, rows) = (shape.columns, shape.rows);
         let inverse_masses = &inverse_masses[..];
         let (gravity, air_damping) = (params.gravity, params.air_damping);
-        let sweep_order = *grid_sweep;
         // The batches within rows that open a sweep, those that close it, and the rest.
-        let middle = if sweep_order == GridSweep::BatchByBatch {
+        let middle = if matches!(schedule, Schedule::BatchByBatch) {
             0..grid.batches.len()
         } else {
             grid.middle_batches()
@@ -654,237 +845,25 @@ impl Simulation {
             lambdas.fill(0.0);
         }
         let (opening, closing) = (middle.start, middle.end..batches.len());
-        // The team's threads where one leads (it may hold fewer than rayon's pool:
-        // `TEAM_ROWS_PER_THREAD`).
-        let threads = if parallel {
-            team_threads().unwrap_or_else(rayon::current_num_threads)
-        } else {
-            1
-        };
         let renew = row_forces.and_then(|r| r.renew);
         // The wind's renewal in each sub-step: one sub-step's, or a whole step's in one pass.
         let this_substep = [renew];
         let renewals = step.map_or(&this_substep[..], |step| &step.renewals[..]);
         let substep_count = renewals.len();
-        // The sub-step as one wavefront: the wind's shares (when due) and the prediction, then the batches
-        // of every sweep, each sweep followed by its end. A whole step's sub-steps go a few at a time,
-        // each pass of the wavefront running several sub-steps one behind the other.
-        // A whole step's passes and a lone sub-step's wavefront pay from different sizes, and need
-        // different room for their seams.
-        let (wavefront_min_particles, rows_per_depth) = if step.is_some() {
-            (
-                WHOLE_STEP_WAVEFRONT_MIN_PARTICLES,
-                WHOLE_STEP_WAVEFRONT_ROWS_PER_DEPTH,
-            )
-        } else {
-            (WAVEFRONT_MIN_PARTICLES, WAVEFRONT_ROWS_PER_DEPTH)
-        };
-        // A whole step on a team of threads can go as a chain of wavefronts instead
-        // (`Wavefront::run_link`).
-        let chain_team = step
-            .and(team_threads())
-            .filter(|&team| parallel && team > 1);
-        let wavefront = 'plan: {
-            // Decided before the plan is built, so that a small cloth's sub-step builds none.
-            let (parts, forced_per_pass, forced_chain) = match sweep_order {
-                GridSweep::Passes | GridSweep::BatchByBatch | GridSweep::Pipeline => {
-                    break 'plan None;
-                }
-                GridSweep::Wavefront {
-                    parts,
-                    substeps_per_pass,
-                } => (parts, Some(substeps_per_pass), false),
-                GridSweep::Chain { .. } | GridSweep::Opposed { .. } if step.is_none() => {
-                    break 'plan None;
-                }
-                GridSweep::Chain { substeps_per_link } => (1, Some(substeps_per_link), true),
-                GridSweep::Opposed { substeps_per_pass } => (2, Some(substeps_per_pass), false),
-                // Once the cloth outgrows the caches (and, below, in parts only when the seams,
-                // which run on one thread each, are a small share of the rows). A team in equal
-                // parts runs the pipeline instead (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`).
-                GridSweep::Auto
-                    if inverse_masses.len() < wavefront_min_particles
-                        || (parallel && team_in_equal_parts().is_some()) =>
-                {
-                    break 'plan None;
-                }
-                GridSweep::Auto => (threads, None, false),
-            };
-            let reach = if params.long_range_attachments {
-                *tether_row_reach
-            } else {
-                0
-            };
-            // The items of sub-steps `substeps`, one after another.
-            let items_of = |substeps: Range<usize>| -> Vec<(WaveItem, usize)> {
-                substeps
-                    .flat_map(|s| {
-                        WaveItem::of_substep(
-                            s,
-                            renewals[s].is_some(),
-                            by_last_row,
-                            iterations,
-                            reach,
-                        )
-                    })
-                    .collect()
-            };
-            let one = items_of(0..1);
-            // A sub-step can follow another in the same pass only with its prediction among the items
-            // (its attachments' pins near enough).
-            if step.is_some() && !WaveItem::has_prediction(&one) {
-                break 'plan None;
+        let (wavefront, pipeline) = match schedule {
+            Schedule::Wavefronts(plan) => (Some(plan), None),
+            Schedule::Pipeline => {
+                let stages = pipeline_plan.plan.as_ref();
+                (
+                    None,
+                    Some(stages.expect("planned with the pipeline's stages")),
+                )
             }
-            let most = match forced_per_pass {
-                Some(per_pass) => per_pass.clamp(1, substep_count),
-                None => substeps_in_flight(
-                    columns,
-                    WaveItem::wavefront(&one, rows).depth() + 1,
-                    substep_count,
-                ),
-            };
-            // Passes (or links) of `sizes` sub-steps each.
-            let passes_of = |sizes: &[usize]| -> Vec<(Wavefront, Vec<(WaveItem, usize)>)> {
-                let mut first = 0;
-                sizes
-                    .iter()
-                    .map(|&size| {
-                        let items = items_of(first..first + size);
-                        first += size;
-                        (WaveItem::wavefront(&items, rows), items)
-                    })
-                    .collect()
-            };
-            // `per_pass` sub-steps a pass, the last pass fewer.
-            let even = |per_pass: usize| -> Vec<usize> {
-                (0..substep_count)
-                    .step_by(per_pass)
-                    .map(|first| per_pass.min(substep_count - first))
-                    .collect()
-            };
-            if forced_chain {
-                let team = chain_team.expect("the chain needs a team of threads");
-                break 'plan Some(WavefrontPlan {
-                    passes: passes_of(&even(most)),
-                    most_per_pass: most,
-                    way: PassesGo::Chain(team),
-                });
-            }
-            // Two parts sweeping opposite ways: each part's strips need the other's only across the
-            // cut, where the attachments would read the pins of rows across it too if they reached
-            // beyond their own row.
-            let opposed = |most: usize| WavefrontPlan {
-                passes: passes_of(&even(most)),
-                most_per_pass: most,
-                way: PassesGo::Opposed,
-            };
-            if let GridSweep::Opposed { .. } = sweep_order {
-                assert_eq!(
-                    chain_team,
-                    Some(2),
-                    "opposed parts need a team of two threads"
-                );
-                break 'plan (reach == 0).then(|| opposed(most));
-            }
-            // In parts: as many sub-steps a pass as fit the parts, at most `most`.
-            let in_parts = (1..=most).rev().find_map(|per_pass| {
-                let passes = passes_of(&even(per_pass));
-                let fit = passes.iter().all(|(plan, _)| {
-                    plan.fits(parts)
-                        && !(sweep_order == GridSweep::Auto
-                            && threads > 1
-                            && rows < rows_per_depth * threads * plan.depth())
-                });
-                fit.then_some(WavefrontPlan {
-                    passes,
-                    most_per_pass: per_pass,
-                    way: PassesGo::InParts(parts),
-                })
-            });
-            // On a team of two whose attachments read their own rows' pins, two parts sweeping
-            // opposite ways where their passes hold more sub-steps than passes in parts would: each
-            // thread keeps its own rows, as in parts, without seams to make room for.
-            if let (GridSweep::Auto, Some(2), 0) = (sweep_order, chain_team, reach)
-                && in_parts
-                    .as_ref()
-                    .is_some_and(|plan| most > plan.most_per_pass)
-            {
-                break 'plan Some(opposed(most));
-            }
-            // On a larger team, a chain where each of its links holds more sub-steps than a pass in
-            // parts would: both stream a row from memory once a pass (or link), but a chain has no
-            // seams to make room for. Where no pass fits the
-            // parts the step goes sub-step by sub-step as before: neither is measured there.
-            if let (GridSweep::Auto, Some(team)) = (sweep_order, chain_team) {
-                let sizes = link_sizes(substep_count, most, team);
-                let shortest = sizes.iter().copied().min().unwrap_or(1);
-                if in_parts
-                    .as_ref()
-                    .is_some_and(|plan| shortest > plan.most_per_pass)
-                {
-                    let longest = sizes.iter().copied().max().unwrap_or(1);
-                    break 'plan Some(WavefrontPlan {
-                        passes: passes_of(&sizes),
-                        most_per_pass: longest,
-                        way: PassesGo::Chain(team),
-                    });
-                }
-            }
-            // A test's fixed order: refusing it would let the test compare pass by pass with itself (a
-            // whole step that does not fit goes sub-step by sub-step, and is checked there).
-            if let (None, GridSweep::Wavefront { parts, .. }, None) = (&in_parts, sweep_order, step)
-            {
-                panic!("{parts} parts do not fit {rows} rows");
-            }
-            in_parts
+            Schedule::Passes | Schedule::BatchByBatch => (None, None),
         };
         // Whether the wavefront does the wind and the prediction itself.
-        let prediction_in_wavefront = wavefront
-            .as_ref()
-            .is_some_and(|plan| WaveItem::has_prediction(&plan.passes[0].1));
-        // The whole sub-step as one hand-off to a team whose threads each keep their own rows.
-        let pipeline = 'plan: {
-            let team = parallel.then(team_in_equal_parts).flatten();
-            let parts = match (sweep_order, team) {
-                (GridSweep::Pipeline, Some(parts)) => parts,
-                (GridSweep::Pipeline, None) => panic!("the pipeline needs a team in equal parts"),
-                (GridSweep::Auto, Some(parts)) if wavefront.is_none() => parts,
-                _ => break 'plan None,
-            };
-            // The plan of the sub-step before serves unless one of the things it depends on changed.
-            let renewed = renewals.iter().map(Option::is_some);
-            let moves = progress.cuts_moved();
-            let current = pipeline_plan.key.as_ref().is_some_and(|key| {
-                key.0.iter().copied().eq(renewed.clone())
-                    && (key.1, key.2, key.3) == (iterations, parts, moves)
-            });
-            if !current {
-                let renewed: Vec<bool> = renewed.collect();
-                pipeline_plan.plan = PipelineStages::new(
-                    &renewed,
-                    strips,
-                    by_last_row,
-                    middle.clone(),
-                    iterations,
-                    columns,
-                    parts,
-                    progress,
-                );
-                pipeline_plan.key = Some((renewed, iterations, parts, moves));
-            }
-            if sweep_order == GridSweep::Pipeline {
-                assert!(
-                    pipeline_plan.plan.is_some(),
-                    "{parts} parts do not fit {rows} rows"
-                );
-            }
-            pipeline_plan.plan.as_ref()
-        };
-        // A whole step goes only as one pipelined pass or as wavefronts of several sub-steps; the caller
-        // steps sub-step by sub-step otherwise.
-        if step.is_some() && pipeline.is_none() && wavefront.is_none() {
-            return false;
-        }
+        let prediction_in_wavefront =
+            wavefront.is_some_and(|plan| WaveItem::has_prediction(&plan.passes[0].1));
         if pipeline.is_none()
             && !prediction_in_wavefront
             && let Some((wind, air_velocity)) = renew
@@ -914,9 +893,7 @@ impl Simulation {
         // finished the next sub-step's prediction: `Stage::after_all`; in a wavefront of several
         // sub-steps the sub-step after next runs a whole sub-step's depth of rows, at least the
         // attachments' reach, behind: checked on the schedule,
-        // `in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again`, and
-        // for a chain, whose links wait for the link before,
-        // `in_a_chain_each_pins_buffer_is_read_before_it_is_gathered_again`).
+        // `in_a_pass_of_several_sub_steps_each_pins_buffer_is_read_before_it_is_gathered_again`).
         let (first_buffer, second_buffer) = tether_pin_positions.split_at_mut(pinned_indices.len());
         let tethers = [first_buffer, second_buffer].map(|buffer| {
             Tethers::of_substep(
@@ -937,9 +914,7 @@ impl Simulation {
             // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
             // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
             // touch no row at once that another part touches (`Pipeline`), the wavefront's concurrent
-            // parts and seams touch disjoint rows (`Wavefront::fits`), a chain's links touch a row
-            // only after the earlier links are done with it (`Wavefront::run_link`), and two opposed
-            // parts touch a row at once only with units of the same item, which write nothing in common
+            // parts and seams touch disjoint rows (`Wavefront::fits`), and two opposed parts touch a row at once only with units of the same item, which write nothing in common
             // (a batch's strips share no particle, as in a pass over them; two cell rows of the wind
             // only read the particle row between them) (`Wavefront::run_opposed_part`); each strip owns
             // its constraints' multipliers.
@@ -1029,8 +1004,8 @@ impl Simulation {
                 // SAFETY: no attachment reads the row's pins meanwhile, in this buffer: a pass runs
                 // none, the pipeline's stage runs them only after every part has finished it
                 // (`Stage::after_all`), and the wavefront keeps them behind this item by the tethers'
-                // reach (`WaveItem::of_substep`) and, in a pass of several sub-steps or a chain of
-                // them, those of the sub-step two before (the same buffer) ahead of it (see `tethers`
+                // reach (`WaveItem::of_substep`) and, in a pass of several sub-steps, those of the
+                // sub-step two before (the same buffer) ahead of it (see `tethers`
                 // above).
                 unsafe { tethers.gather(particles_of(row), &positions) };
             }
@@ -1130,7 +1105,7 @@ impl Simulation {
                 part.for_each(|p| plan.pipeline.run_part(p, shared_progress, run_items))
             });
             progress.rebalance(&plan.pipeline);
-            return true;
+            return;
         }
         // First pass (unless the wavefront does it): the forces (unless summed already), the prediction
         // and the pins' gather of each part's rows, then, pass by pass, the opening batches over them.
@@ -1142,16 +1117,7 @@ impl Simulation {
                 }
             });
         }
-        if let Some(WavefrontPlan {
-            passes,
-            most_per_pass: per_pass,
-            way,
-        }) = wavefront
-        {
-            if step.is_some() {
-                *wavefront_substeps_per_pass = per_pass;
-                *wavefront_way = Some(way);
-            }
+        if let Some(WavefrontPlan { passes, way, .. }) = wavefront {
             let run_item =
                 |items: &[(WaveItem, usize)], item: usize, row: usize| match items[item].0 {
                     // Last row `row` of the cell row above it (none above the first row).
@@ -1169,36 +1135,17 @@ impl Simulation {
                         }
                     }
                 };
-            let parts_count = match way {
+            let parts_count = match *way {
                 PassesGo::InParts(parts) => parts,
-                PassesGo::Chain(team) => {
-                    // Link `k` on thread `k mod team`, each thread's links in order: one index per
-                    // thread of the team, which, also when its threads claim indices one by one,
-                    // leaves none unclaimed while the others wait (`team_threads`).
-                    progress.reset_links(passes.len());
-                    let progress = &*progress;
-                    parts(team, parallel, 1, |threads| {
-                        threads.for_each(|thread| {
-                            for link in (thread..passes.len()).step_by(team) {
-                                let (plan, items) = &passes[link];
-                                let previous = link.checked_sub(1).map(|before| &passes[before].0);
-                                plan.run_link(link, previous, progress, |item, row| {
-                                    run_item(items, item, row)
-                                });
-                            }
-                        })
-                    });
-                    return true;
-                }
                 PassesGo::Opposed => {
-                    for (plan, items) in &passes {
+                    for (plan, items) in passes {
                         let run_item = |item: usize, row: usize| run_item(items, item, row);
                         // Each pass starts on the rows the pass before ended on, also from step to
                         // step: the two parts reach the middle row at the end of one pass and leave
                         // it at the start of the next.
                         let halves = plan.opposed_parts(rows / 2, *opposed_upward_first);
                         *opposed_upward_first = !*opposed_upward_first;
-                        progress.reset_links(2);
+                        progress.reset_counters(2);
                         let progress = &*progress;
                         // One part per thread of the team, the same thread for the same part from
                         // pass to pass, and both at once: they wait for each other.
@@ -1206,10 +1153,10 @@ impl Simulation {
                             plan.run_opposed_part(&halves, part, progress, run_item)
                         });
                     }
-                    return true;
+                    return;
                 }
             };
-            for (plan, items) in &passes {
+            for (plan, items) in passes {
                 let run_item = |item: usize, row: usize| run_item(items, item, row);
                 // Each part's own strips need nothing across a cut, so the parts run at once; the seams
                 // around the cuts need both neighbours' parts done, and touch disjoint rows of their
@@ -1224,7 +1171,7 @@ impl Simulation {
                         .for_each(|s| plan.run_seam(s, parts_count, run_item))
                 });
             }
-            return true;
+            return;
         }
         for iteration in 0..iterations {
             for batch in middle.clone() {
@@ -1240,16 +1187,57 @@ impl Simulation {
                 close_rows(tethers_of(0), rows, last)
             });
         }
-        true
     }
+}
+
+/// Which schedule a grid's position-based sub-step, or whole step, runs
+/// ([`Simulation::plan_grid_schedule`]). Every choice gives the same bits; production always asks for
+/// `Auto`, and the tests force the others to compare them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) enum GridSweep {
+    /// Chosen by the cloth's size and the team ([`Simulation::plan_grid_schedule`]).
+    Auto,
+    /// A pass over the cloth per batch (the batches along rows sharing theirs with the per-row work).
+    Passes,
+    /// A pass over the cloth per batch, the batches along rows too.
+    BatchByBatch,
+    /// The one-pass wavefront in this many parts ([`Wavefront`]), if they fit; a whole step's
+    /// sub-steps up to `substeps_per_pass` a pass (fewer where they do not fit), or with 0 each
+    /// sub-step on its own.
+    Wavefront {
+        parts: usize,
+        substeps_per_pass: usize,
+    },
+    /// On a team in equal parts, the whole sub-step in one hand-off, each thread on its own rows
+    /// ([`Pipeline`]); it must fit.
+    Pipeline,
+    /// On a team of two threads (it must have one), a whole step's passes of up to
+    /// `substeps_per_pass` sub-steps each as two parts sweeping opposite ways
+    /// ([`Wavefront::opposed_parts`]); sub-step by sub-step pass by pass where a whole step cannot go
+    /// in wavefronts, or where the attachments read pins of other rows.
+    Opposed { substeps_per_pass: usize },
+}
+
+/// How a grid's sub-step, or a whole step, goes ([`Simulation::plan_grid_schedule`]).
+pub(crate) enum Schedule {
+    /// A pass over the cloth per batch, the batches along rows sharing theirs with the per-row work.
+    Passes,
+    /// A pass over the cloth per batch, the batches along rows too (the tests' reference for `Passes`).
+    BatchByBatch,
+    /// One hand-off to a team in equal parts, each thread on its own rows ([`Pipeline`]), in the stages
+    /// kept in `Simulation::pipeline_plan`.
+    Pipeline,
+    /// Wavefronts down the rows.
+    Wavefronts(WavefrontPlan),
 }
 
 /// How a grid's sub-step, or a whole step, goes as wavefronts
 /// ([`Simulation::project_grid_constraints`]).
-struct WavefrontPlan {
-    /// Each pass (a chain's link) and its items.
+pub(crate) struct WavefrontPlan {
+    /// Each pass and its items.
     passes: Vec<(Wavefront, Vec<(WaveItem, usize)>)>,
-    /// The most sub-steps a pass (or link) holds.
+    /// The most sub-steps a pass holds.
     most_per_pass: usize,
     /// How the passes share out the rows among the threads.
     way: PassesGo,
@@ -1260,8 +1248,6 @@ struct WavefrontPlan {
 pub(crate) enum PassesGo {
     /// Each pass cut into this many parts, the seams around the cuts after them (`Wavefront::run_part`).
     InParts(usize),
-    /// As a chain of links, link `k` on thread `k mod` this team's threads (`Wavefront::run_link`).
-    Chain(usize),
     /// Each pass as two opposed parts on a team of two threads (`Wavefront::opposed_parts`).
     Opposed,
 }
@@ -1343,7 +1329,7 @@ enum StageKind {
 }
 
 /// A whole step's sub-steps, for one pipelined pass or for wavefronts of several sub-steps a pass
-/// ([`Simulation::pipelined_step`]).
+/// ([`Simulation::whole_step`]).
 pub(crate) struct WholeStep {
     /// Per sub-step, the wind's parameters and air velocity where its shares are renewed.
     renewals: Vec<Option<(Wind, DVec3)>>,
@@ -1511,9 +1497,10 @@ by_cpu! {
 
 #[cfg(test)]
 mod tests {
+    use super::{GridSweep, PassesGo, Schedule};
     use crate::model::{ClothModel, GridSpec};
     use crate::params::{Method, SimParams};
-    use crate::sim::Simulation;
+    use crate::sim::{Path, Simulation};
     use glam::DVec3;
 
     /// The wind's renewal interval (s) that holds its forces for `substeps` sub-steps of `method` in the
@@ -1592,27 +1579,46 @@ mod tests {
     /// further and swaying every frame.
     fn turning_pole_bits(
         mut sim: Simulation,
+        sweep: GridSweep,
         threads: usize,
         frames: usize,
-    ) -> (Vec<[u64; 3]>, Vec<[u64; 3]>) {
-        turning_pole(&mut sim, threads, frames);
+    ) -> StateBits {
+        turning_pole(&mut sim, sweep, threads, frames);
         state_bits(&sim)
     }
 
-    /// `frames` frames of `sim` on a pool of `threads` threads, its pole turning a little further and
-    /// swaying every frame.
-    fn turning_pole(sim: &mut Simulation, threads: usize, frames: usize) {
+    /// `frames` frames of `sim` in the schedule `sweep` asks for on a pool of `threads` threads, its
+    /// pole turning a little further and swaying every frame. Returns how the last frame's step went
+    /// whole as wavefronts: the most sub-steps a pass and how the passes shared out the rows (`None`:
+    /// as the pipeline, or sub-step by sub-step).
+    fn turning_pole(
+        sim: &mut Simulation,
+        sweep: GridSweep,
+        threads: usize,
+        frames: usize,
+    ) -> Option<(usize, PassesGo)> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
         pool.install(|| {
+            let mut last = None;
             for frame in 0..frames {
                 sim.move_pins(crate::solver::hoist_sway_and_turn(frame))
                     .unwrap();
-                sim.step(1.0 / 60.0).unwrap();
+                let (_, whole) = sim.step_through(1.0 / 60.0, Path::Fast(sweep)).unwrap();
+                last = match whole {
+                    Some(Schedule::Wavefronts(plan)) => Some((plan.most_per_pass, plan.way)),
+                    _ => None,
+                };
             }
-        });
+            last
+        })
+    }
+
+    /// The most sub-steps a pass of a whole step in wavefronts ran (0: none ran).
+    fn per_pass(how: Option<(usize, PassesGo)>) -> usize {
+        how.map_or(0, |(per_pass, _)| per_pass)
     }
 
     /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
@@ -1624,16 +1630,18 @@ mod tests {
             let run = |batch_by_batch: bool, forces_beforehand: bool| {
                 let height = GridSpec::default().height;
                 let mut sim = windy_flag(23, 13, height, method, false);
-                if batch_by_batch {
-                    let grid = sim.grid_constraints.as_ref().unwrap();
-                    assert!(grid.by_last_row.iter().any(|(_, span)| *span == 0));
-                    sim.grid_sweep = crate::sim::GridSweep::BatchByBatch;
-                }
+                let grid = sim.grid_constraints.as_ref().unwrap();
+                assert!(grid.by_last_row.iter().any(|(_, span)| *span == 0));
+                let sweep = if batch_by_batch {
+                    GridSweep::BatchByBatch
+                } else {
+                    GridSweep::Auto
+                };
                 if forces_beforehand {
                     sim.grid_triangulation = None; // the general triangle path, summed into `forces`
                 }
                 for _ in 0..20 {
-                    sim.step(1.0 / 60.0).unwrap();
+                    sim.step_through(1.0 / 60.0, Path::Fast(sweep)).unwrap();
                 }
                 state_bits(&sim)
             };
@@ -1649,7 +1657,6 @@ mod tests {
     /// long-range attachments and a moving pole.
     #[test]
     fn the_wavefront_gives_the_bits_of_pass_by_pass() {
-        use crate::sim::GridSweep;
         // (method, sweeps per sub-step, part counts): a sweep's wavefront is 10 rows deep, with the wind
         // and the prediction 11, and each part needs twice the depth, so 133 rows take up to 6 parts of
         // one sweep and 3 of two (21 deep).
@@ -1686,9 +1693,8 @@ mod tests {
         for (method, sweeps, part_counts) in cases {
             // `threads` > 1: on a pool of that many threads, the parallel code paths forced on.
             let run = |sweep: GridSweep, threads: usize| {
-                let mut sim = windy_flag(9, rows, 3.0, method, threads > 1);
-                sim.grid_sweep = sweep;
-                turning_pole_bits(sim, threads, 12)
+                let sim = windy_flag(9, rows, 3.0, method, threads > 1);
+                turning_pole_bits(sim, sweep, threads, 12)
             };
             let passes = run(GridSweep::Passes, 1);
             for parts in part_counts {
@@ -1792,7 +1798,6 @@ mod tests {
     /// sub-steps on gathers into again (one buffer for all sub-steps fails it).
     #[test]
     fn the_wavefront_with_the_prediction_gives_the_bits_of_pass_by_pass() {
-        use crate::sim::GridSweep;
         let (columns, rows) = (9, 133);
         let hoist = |every: usize| -> Vec<usize> {
             (0..rows).step_by(every).map(|r| r * columns).collect()
@@ -1837,9 +1842,8 @@ mod tests {
                     if general {
                         sim.grid_triangulation = None; // summed into `forces` by the general path
                     }
-                    sim.grid_sweep = sweep;
-                    turning_pole(&mut sim, threads, 8);
-                    (state_bits(&sim), sim.wavefront_substeps_per_pass)
+                    let how = turning_pole(&mut sim, sweep, threads, 8);
+                    (state_bits(&sim), per_pass(how))
                 };
                 let (passes, _) = run(GridSweep::Passes, 1);
                 // A whole step goes in passes only with the prediction in the wavefront and the wind's
@@ -1901,7 +1905,6 @@ mod tests {
     /// steps sub-step by sub-step.
     #[test]
     fn a_whole_step_in_wavefronts_of_several_sub_steps_gives_the_bits_of_pass_by_pass() {
-        use crate::sim::GridSweep;
         let (methods, winds) = (WHOLE_STEP_METHODS, WHOLE_STEP_WINDS);
         let rows = 133;
         let mut fewer = 0;
@@ -1913,9 +1916,8 @@ mod tests {
                     let mut sim = windy_flag(9, rows, 3.0, method, threads > 1);
                     sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
                     sim.params.wind.renewal_interval = held_for(interval, method);
-                    sim.grid_sweep = sweep;
-                    turning_pole(&mut sim, threads, 8);
-                    (state_bits(&sim), sim.wavefront_substeps_per_pass)
+                    let how = turning_pole(&mut sim, sweep, threads, 8);
+                    (state_bits(&sim), per_pass(how))
                 };
                 let (passes, none) = run(GridSweep::Passes, 1);
                 assert_eq!(none, 0, "pass by pass runs no wavefront");
@@ -1955,66 +1957,21 @@ mod tests {
 
     /// `sim` in a wind of `speed` m/s along x (a quarter of it along z) held for `interval` sub-steps,
     /// swept `sweep`, after `frames` frames of a turning and swaying pole on `threads` threads: its
-    /// bits, and how its last whole step went (sub-steps a pass at most, whether as a chain, whether
-    /// as opposed parts).
+    /// bits, and how its last whole step went (sub-steps a pass at most, whether as opposed parts).
     fn whole_step_run(
         mut sim: Simulation,
         speed: f64,
         interval: u32,
-        sweep: crate::sim::GridSweep,
+        sweep: GridSweep,
         threads: usize,
         frames: usize,
-    ) -> (StateBits, (usize, bool, bool)) {
+    ) -> (StateBits, (usize, bool)) {
         let method = sim.params.method;
         sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
         sim.params.wind.renewal_interval = held_for(interval, method);
-        sim.grid_sweep = sweep;
-        turning_pole(&mut sim, threads, frames);
-        let how = (
-            sim.wavefront_substeps_per_pass,
-            matches!(sim.wavefront_way, Some(super::PassesGo::Chain(_))),
-            sim.wavefront_way == Some(super::PassesGo::Opposed),
-        );
-        (state_bits(&sim), how)
-    }
-
-    /// A whole step as a chain of wavefronts on a team (links of 1, 2, 3 and all sub-steps, on two,
-    /// three and four threads) gives the bits of pass by pass: small-steps XPBD and PBD, with the wind
-    /// renewed every sub-step, held for three and off, a turning and swaying pole; XPBD with multipliers
-    /// steps sub-step by sub-step.
-    #[test]
-    fn a_whole_step_as_a_chain_of_wavefronts_gives_the_bits_of_pass_by_pass() {
-        use crate::sim::GridSweep;
-        let (methods, winds) = (WHOLE_STEP_METHODS, WHOLE_STEP_WINDS);
-        for method in methods {
-            let whole_steps = !matches!(method, Method::Xpbd { .. });
-            for (speed, interval) in winds {
-                let run = |sweep: GridSweep, threads: usize| {
-                    let sim = windy_flag(9, 61, 1.5, method, threads > 1);
-                    let (bits, (per_link, chained, _)) =
-                        whole_step_run(sim, speed, interval, sweep, threads, 6);
-                    (bits, (per_link, chained))
-                };
-                let (passes, _) = run(GridSweep::Passes, 1);
-                for threads in [2, 3, 4] {
-                    for substeps_per_link in [1, 2, 3, 20] {
-                        let sweep = GridSweep::Chain { substeps_per_link };
-                        let (bits, (per_link, chained)) = run(sweep, threads);
-                        let what = format!(
-                            "{method:?}, wind {speed} m/s every {interval}: links of \
-                             {substeps_per_link} sub-steps on {threads} threads"
-                        );
-                        assert_eq!(passes, bits, "{what}");
-                        if whole_steps {
-                            let most = substeps_per_link.min(method.substeps() as usize);
-                            assert_eq!((per_link, chained), (most, true), "{what}");
-                        } else {
-                            assert_eq!((per_link, chained), (0, false), "{what}");
-                        }
-                    }
-                }
-            }
-        }
+        let how = turning_pole(&mut sim, sweep, threads, frames);
+        let opposed = how.is_some_and(|(_, way)| way == PassesGo::Opposed);
+        (state_bits(&sim), (per_pass(how), opposed))
     }
 
     /// A whole step as two opposed parts on a team of two threads (passes of 1, 2, 3 and all
@@ -2024,7 +1981,6 @@ mod tests {
     /// grid whose attachments read the pins of other rows (pinned every third row: a reach of one).
     #[test]
     fn a_whole_step_as_two_opposed_parts_gives_the_bits_of_pass_by_pass() {
-        use crate::sim::GridSweep;
         for method in WHOLE_STEP_METHODS {
             let whole_steps = !matches!(method, Method::Xpbd { .. });
             for (speed, interval) in WHOLE_STEP_WINDS {
@@ -2039,9 +1995,7 @@ mod tests {
                             model
                         });
                         assert_eq!(sim.tether_row_reach, usize::from(every_third_row));
-                        let (bits, (per_pass, _, opposed)) =
-                            whole_step_run(sim, speed, interval, sweep, threads, 6);
-                        (bits, (per_pass, opposed))
+                        whole_step_run(sim, speed, interval, sweep, threads, 6)
                     };
                     let (passes, _) = run(GridSweep::Passes, 1);
                     for substeps_per_pass in [1, 2, 3, 20] {
@@ -2064,65 +2018,36 @@ mod tests {
         }
     }
 
-    /// A chain's links spread a step's sub-steps evenly over the threads, in as few rounds as links of
-    /// at most `most` allow.
-    #[test]
-    fn a_chain_gives_every_thread_about_as_many_sub_steps() {
-        for substeps in 1..=40 {
-            for most in 1..=8 {
-                for threads in 2..=4 {
-                    let sizes = super::link_sizes(substeps, most, threads);
-                    let what = format!("{substeps} sub-steps, links of at most {most}: {sizes:?}");
-                    assert_eq!(sizes.iter().sum::<usize>(), substeps, "{what}");
-                    assert!(sizes.iter().all(|&s| (1..=most).contains(&s)), "{what}");
-                    // As few links as links of at most `most` allow, in whole rounds where there are
-                    // enough sub-steps.
-                    let rounds = substeps.div_ceil(threads * most);
-                    assert_eq!(sizes.len(), (rounds * threads).min(substeps), "{what}");
-                    let per_thread: Vec<usize> = (0..threads)
-                        .map(|t| sizes.iter().skip(t).step_by(threads).sum())
-                        .collect();
-                    let (fewest, most_work) = (
-                        per_thread.iter().min().unwrap(),
-                        per_thread.iter().max().unwrap(),
-                    );
-                    assert!(most_work - fewest <= rounds, "{what}: {per_thread:?}");
-                }
-            }
-        }
-        assert_eq!(super::link_sizes(20, 4, 2), [4, 4, 3, 3, 3, 3]);
-        assert_eq!(super::link_sizes(20, 6, 2), [5, 5, 5, 5]);
-    }
-
     /// Left to choose, a grid above `WHOLE_STEP_WAVEFRONT_MIN_PARTICLES` takes several sub-steps a
     /// pass (as many as `WAVEFRONT_WINDOW_BYTES` holds) and gives the bits of pass by pass, with
     /// the wind held for two sub-steps. On one thread in one part. On a team (whose threads claim
     /// the passes index by index at these sizes, `TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`) where
     /// passes in parts would hold fewer: on two threads as two opposed parts, as many sub-steps a
-    /// pass as on one (384 × 288, against at most two in parts); on three and four as a chain
-    /// (384 × 456, so that their threads claim: links of four or five). Else in parts: 1 400
-    /// columns on two threads (one sub-step a pass every way); and sub-step by sub-step where no
-    /// pass fits the parts: 144 rows on three threads.
+    /// pass as on one (384 × 288, against at most two in parts); on three and four in parts, fewer
+    /// sub-steps a pass (384 × 456, so that their threads claim). Else in parts: 1 400 columns on
+    /// two threads (one sub-step a pass every way); and sub-step by sub-step where no pass fits the
+    /// parts: 144 rows on three threads.
     #[test]
     fn left_to_choose_a_large_grid_takes_several_sub_steps_a_pass_with_the_same_bits() {
-        use crate::sim::GridSweep;
         let method = Method::SmallStepsXpbd { substeps: 20 };
-        // (columns, rows, threads, whether a team of two runs opposed parts and a larger one chains it:
-        // None where the step goes sub-step by sub-step).
+        // (columns, rows, threads, whether a team runs fewer sub-steps a pass in parts than one
+        // thread would: None where the step goes sub-step by sub-step).
         let cases = [
             (384, 288, [1, 2].as_slice(), Some(true)),
             (384, 456, [3, 4].as_slice(), Some(true)),
             (1400, 144, [1, 2].as_slice(), Some(false)),
             (1400, 144, [3].as_slice(), None),
         ];
-        for (columns, rows, thread_counts, chained) in cases {
+        for (columns, rows, thread_counts, fewer_in_parts) in cases {
             assert!(columns * rows >= super::WHOLE_STEP_WAVEFRONT_MIN_PARTICLES);
             for &threads in thread_counts.iter().filter(|&&threads| threads > 1) {
                 assert!(crate::sim::team_claims_its_passes(columns * rows, threads));
             }
             let run = |sweep: GridSweep, threads: usize| {
-                let sim = windy_flag(columns, rows, 0.6, method, threads > 1);
-                whole_step_run(sim, 6.0, 2, sweep, threads, 2)
+                let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
+                sim.params.wind.renewal_interval = held_for(2, method);
+                let how = turning_pole(&mut sim, sweep, threads, 2);
+                (state_bits(&sim), how)
             };
             let (passes, _) = run(GridSweep::Passes, 1);
             // A sub-step keeps 12 rows in flight: its depth, 11 (the wind's 1 and a sweep's 10), and
@@ -2130,22 +2055,23 @@ mod tests {
             let most = super::substeps_in_flight(columns, 12, 20);
             for &threads in thread_counts {
                 let what = format!("{columns} × {rows} on {threads} threads");
-                let (bits, (per_pass, in_chain, opposed)) = run(GridSweep::Auto, threads);
+                let (bits, how) = run(GridSweep::Auto, threads);
                 assert!(bits == passes, "{what}: not the bits of pass by pass");
-                let how = (per_pass, in_chain, opposed);
-                match (threads, chained) {
-                    (1, _) => assert_eq!(how, (most, false, false), "{what}"),
+                match (threads, fewer_in_parts) {
+                    (1, _) => assert_eq!(how, Some((most, PassesGo::InParts(1))), "{what}"),
                     (2, Some(true)) => {
-                        assert_eq!(how, (most, false, true), "{what}");
-                        assert!(per_pass > 2, "{what}: {per_pass} sub-steps a pass");
+                        assert_eq!(how, Some((most, PassesGo::Opposed)), "{what}");
+                        assert!(most > 2, "{what}: {most} sub-steps a pass");
                     }
                     (_, Some(true)) => {
-                        let longest = super::link_sizes(20, most, threads).into_iter().max();
-                        assert_eq!((Some(per_pass), in_chain, opposed), (longest, true, false));
-                        assert!(per_pass >= 4, "{what}: links of {per_pass}");
+                        let (per_pass, way) = how.expect("wavefronts");
+                        assert_eq!(way, PassesGo::InParts(threads), "{what}");
+                        assert!((1..most).contains(&per_pass), "{what}: {per_pass}");
                     }
-                    (_, Some(false)) => assert_eq!(how, (1, false, false), "{what}"),
-                    (_, None) => assert_eq!(how, (0, false, false), "{what}"),
+                    (_, Some(false)) => {
+                        assert_eq!(how, Some((1, PassesGo::InParts(threads))), "{what}")
+                    }
+                    (_, None) => assert_eq!(how, None, "{what}"),
                 }
             }
         }
@@ -2161,9 +2087,7 @@ mod tests {
     /// every way.
     #[test]
     fn left_to_choose_a_team_in_equal_parts_runs_a_large_grid_as_the_pipeline() {
-        use crate::sim::{
-            GridSweep, TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD, team_claims_its_passes,
-        };
+        use crate::sim::{TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD, team_claims_its_passes};
         let method = Method::SmallStepsXpbd { substeps: 20 };
         for (columns, rows) in [(256, 288), (256, 400)] {
             let particles = columns * rows;
@@ -2175,10 +2099,9 @@ mod tests {
             let run = |sweep: GridSweep, threads: usize| {
                 let mut sim = windy_flag(columns, rows, 0.6, method, threads > 1);
                 sim.params.wind.renewal_interval = held_for(2, method);
-                sim.grid_sweep = sweep;
-                turning_pole(&mut sim, threads, 2);
+                let how = turning_pole(&mut sim, sweep, threads, 2);
                 let run = (
-                    sim.wavefront_substeps_per_pass,
+                    per_pass(how),
                     sim.pipeline_plan
                         .plan
                         .as_ref()
@@ -2219,7 +2142,7 @@ mod tests {
         let (columns, rows) = (64, 46);
         let run = |threads: usize| {
             let mut sim = windy_flag(columns, rows, 0.8, method, threads > 1);
-            turning_pole(&mut sim, threads, 3);
+            turning_pole(&mut sim, GridSweep::Auto, threads, 3);
             let parts = sim
                 .pipeline_plan
                 .plan
@@ -2359,113 +2282,6 @@ mod tests {
         );
     }
 
-    /// In a chain of wavefronts the attachments of a sub-step read its prediction's buffer of the pins'
-    /// positions surely after the predictions within the reach of its sub-step and surely before those
-    /// of the sub-step after next, which may run in another link on another thread: links of one to
-    /// three sub-steps of one sweep and of two, the wind renewed in every sub-step, in none and in every
-    /// other, every reach that lets the prediction into the wavefront, on two to four threads. The same
-    /// check with one buffer fails.
-    #[test]
-    fn in_a_chain_each_pins_buffer_is_read_before_it_is_gathered_again() {
-        use super::WaveItem;
-        use crate::fast::wavefront::Wavefront;
-        use crate::fast::wavefront::tests::chain_before;
-        let sim = windy_flag(9, 20, 3.0, Method::default(), false);
-        let by_last_row = &sim.grid_constraints.as_ref().unwrap().by_last_row;
-        let (mut checked, mut one_buffer_broken) = (0, false);
-        for sizes in [
-            vec![1, 1, 1, 1],
-            vec![2, 2],
-            vec![1, 2, 1],
-            vec![3, 1],
-            vec![2, 1, 2],
-        ] {
-            for sweeps in [1, 2] {
-                for renewing in [|_| true, |_| false, |s: usize| s.is_multiple_of(2)] {
-                    for reach in 0..=10 {
-                        // Each link's items, and where each sub-step's prediction and ends are.
-                        let mut first = 0;
-                        let links_items: Vec<Vec<(WaveItem, usize)>> = sizes
-                            .iter()
-                            .map(|&size| {
-                                first += size;
-                                (first - size..first)
-                                    .flat_map(|s| {
-                                        WaveItem::of_substep(
-                                            s,
-                                            renewing(s),
-                                            by_last_row,
-                                            sweeps,
-                                            reach,
-                                        )
-                                    })
-                                    .collect()
-                            })
-                            .collect();
-                        let find = |wanted: WaveItem| {
-                            links_items.iter().enumerate().find_map(|(link, items)| {
-                                let i = items.iter().position(|(item, _)| *item == wanted)?;
-                                Some((link, i))
-                            })
-                        };
-                        for rows in [5, 31, 90] {
-                            let links: Vec<Wavefront> = links_items
-                                .iter()
-                                .map(|items| WaveItem::wavefront(items, rows))
-                                .collect();
-                            for threads in 2..=4 {
-                                let before = chain_before(&links, threads, 0);
-                                let ordered = |reuse: usize| {
-                                    let ends =
-                                        links_items.iter().enumerate().flat_map(|(l, items)| {
-                                            items
-                                                .iter()
-                                                .enumerate()
-                                                .map(move |(i, it)| (l, i, it.0))
-                                        });
-                                    ends.filter_map(|(l, i, item)| match item {
-                                        WaveItem::End { substep, .. } => Some((l, i, substep)),
-                                        _ => None,
-                                    })
-                                    .all(|(l, i, substep)| {
-                                        let predict = find(WaveItem::Predict { substep })
-                                            .expect("the prediction is in the wavefront");
-                                        let again = find(WaveItem::Predict {
-                                            substep: substep + reuse,
-                                        });
-                                        (0..rows).all(|row| {
-                                            let read = (l, i, row);
-                                            let pins = row.saturating_sub(reach)
-                                                ..(row + reach + 1).min(rows);
-                                            pins.clone().all(|pin_row| {
-                                                before((predict.0, predict.1, pin_row), read)
-                                                    && again.is_none_or(|(la, ia)| {
-                                                        before(read, (la, ia, pin_row))
-                                                    })
-                                            })
-                                        })
-                                    })
-                                };
-                                assert!(
-                                    ordered(2),
-                                    "links {sizes:?} of {sweeps} sweeps, reach {reach}, {rows} \
-                                     rows, {threads} threads"
-                                );
-                                one_buffer_broken |= !ordered(1);
-                                checked += 1;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        assert!(checked > 1000, "{checked} chains checked");
-        assert!(
-            one_buffer_broken,
-            "one buffer would do: the check cannot fail"
-        );
-    }
-
     /// The pipelined sub-step (each thread of a team on its own rows, one hand-off per sub-step) gives
     /// the bits of pass by pass: for small-steps XPBD, XPBD with several sweeps and PBD; on teams of two
     /// to four threads; with the wind renewed every sub-step (its forces from the grid's rows and from
@@ -2474,7 +2290,6 @@ mod tests {
     /// several cuts.
     #[test]
     fn the_pipeline_gives_the_bits_of_pass_by_pass() {
-        use crate::sim::GridSweep;
         let methods = [
             Method::SmallStepsXpbd { substeps: 20 },
             Method::Xpbd {
@@ -2506,8 +2321,7 @@ mod tests {
                     if general {
                         sim.grid_triangulation = None; // summed into `forces` by the general path
                     }
-                    sim.grid_sweep = sweep;
-                    turning_pole_bits(sim, threads, 15)
+                    turning_pole_bits(sim, sweep, threads, 15)
                 };
                 let passes = run(GridSweep::Passes, 1);
                 for threads in [2, 3, 4] {

@@ -4,8 +4,9 @@
 //! hold every schedule a test can force to pass by pass.
 //!
 //! - [`grid_step`]: the sub-step on the state split by component, the grid's constraints in row
-//!   strips, and the choice of schedule — pass by pass, the pipeline of a team of threads, or
-//!   wavefronts of one or several sub-steps a pass down the rows (in parts, opposed or as a chain);
+//!   strips, and the choice of schedule in one function (`Simulation::plan_grid_schedule`) — pass by
+//!   pass, the pipeline of a team of threads, or wavefronts of one or several sub-steps a pass down
+//!   the rows (in parts, or opposed on two threads);
 //! - [`grid_constraints`]: the twelve strip batches and their loops ([`strips_avx512`] with AVX-512);
 //! - [`grid_wind`]: the wind's shares and the forces summed row by row, vectorised;
 //! - [`wavefront`], [`pipeline`], [`parallel`]: the schedules and the team of threads they run on;

@@ -175,8 +175,6 @@ impl Pipeline {
             } else {
                 // A neighbour is behind: the interior first, which touches nothing another part
                 // touches (and shares no particle with the stage's other items), then the boundary.
-                #[cfg(test)]
-                progress.interior_first.fetch_add(1, Ordering::Relaxed);
                 run(interior);
                 for q in neighbours {
                     waited += progress.wait(q, 2 * s - 1);
@@ -244,9 +242,9 @@ struct Timing {
 
 /// How far each part of a [`Pipeline`] has come: `2s + 1` once its boundary items of stage `s` are done,
 /// `2s + 2` once all its items of stage `s` are. Also how long the parts were busy, from which it learns
-/// how far to move the cuts so that they are equally busy ([`rebalance`](Progress::rebalance)). A chain
-/// of wavefronts uses its counters too, each link's counting the steps it has finished
-/// ([`Wavefront::run_link`](crate::fast::wavefront::Wavefront::run_link)).
+/// how far to move the cuts so that they are equally busy ([`rebalance`](Progress::rebalance)). Two
+/// opposed parts of a wavefront use its counters too, each counting the units it has finished
+/// ([`Wavefront::run_opposed_part`](crate::fast::wavefront::Wavefront::run_opposed_part)).
 pub(crate) struct Progress {
     counters: Vec<Counter>,
     poisoned: AtomicBool,
@@ -258,9 +256,6 @@ pub(crate) struct Progress {
     lateness: Vec<f64>,
     /// How often a cut has moved.
     moves: u64,
-    /// How often a part ran a stage's interior before its boundary (its neighbour was behind).
-    #[cfg(test)]
-    interior_first: AtomicUsize,
 }
 
 impl Default for Progress {
@@ -273,8 +268,6 @@ impl Default for Progress {
             shifts: Vec::new(),
             lateness: Vec::new(),
             moves: 0,
-            #[cfg(test)]
-            interior_first: AtomicUsize::new(0),
         }
     }
 }
@@ -309,14 +302,14 @@ impl Progress {
         *self.poisoned.get_mut() = false;
     }
 
-    /// Zero progress for the `links` links of a chain of wavefronts
-    /// ([`Wavefront::run_link`](crate::fast::wavefront::Wavefront::run_link)): one counter per link, the
-    /// cuts a pipeline learnt left as they are. Must happen before the links start.
-    pub fn reset_links(&mut self, links: usize) {
-        if self.counters.len() < links {
-            self.counters.resize_with(links, Counter::default);
+    /// Zero progress for the `parts` parts of a wavefront
+    /// ([`Wavefront::run_opposed_part`](crate::fast::wavefront::Wavefront::run_opposed_part)): one
+    /// counter per part, the cuts a pipeline learnt left as they are. Must happen before the parts start.
+    pub fn reset_counters(&mut self, parts: usize) {
+        if self.counters.len() < parts {
+            self.counters.resize_with(parts, Counter::default);
         }
-        for counter in &self.counters[..links] {
+        for counter in &self.counters[..parts] {
             counter.0.store(0, Ordering::Relaxed);
         }
         *self.poisoned.get_mut() = false;
@@ -410,7 +403,7 @@ impl Progress {
         while self.counters[q].0.load(Ordering::Acquire) < value {
             assert!(
                 !self.poisoned.load(Ordering::Relaxed),
-                "another part (or link) of the sub-steps panicked"
+                "another part of the sub-steps panicked"
             );
             if spins < SPINS_BEFORE_YIELDING {
                 spins += 1;
@@ -427,7 +420,7 @@ impl Progress {
 /// several times a stage's work on the default flag.
 const SPINS_BEFORE_YIELDING: u32 = 1 << 10;
 
-/// Poisons the progress if dropped, which `run_part` (and a chain's link) prevents unless its part
+/// Poisons the progress if dropped, which `run_part` (and an opposed part) prevents unless its part
 /// unwinds.
 pub(crate) struct Poison<'a>(&'a Progress);
 
@@ -450,7 +443,8 @@ mod tests {
     use std::sync::Mutex;
 
     /// Runs every part of `pipeline` on its own thread and returns, per stage and row, the position of
-    /// its item in the order in which the items ran.
+    /// its item in the order in which the items ran; and how often a part ran a stage's interior
+    /// before its boundary (its neighbour was behind).
     fn run_logged(pipeline: &Pipeline, slow_first_part: bool) -> (Vec<Vec<usize>>, usize) {
         let mut progress = Progress::default();
         progress.reset(pipeline.parts());
@@ -492,8 +486,20 @@ mod tests {
                     })
                     .collect()
             })
-            .collect();
-        (order, progress.interior_first.load(Ordering::Relaxed))
+            .collect::<Vec<Vec<usize>>>();
+        let first_of = |s: usize, rows: Range<usize>| rows.map(|row| order[s][row]).min();
+        let interior_first = (0..pipeline.stages.len())
+            .flat_map(|s| (0..pipeline.parts()).map(move |p| (s, p)))
+            .filter(|&(s, p)| {
+                let ([upper, lower], interior) = pipeline.ranges(s, p);
+                let boundary = [first_of(s, upper), first_of(s, lower)]
+                    .into_iter()
+                    .flatten()
+                    .min();
+                matches!((first_of(s, interior), boundary), (Some(i), Some(b)) if i < b)
+            })
+            .count();
+        (order, interior_first)
     }
 
     /// The rows item `row` of `stage` touches.

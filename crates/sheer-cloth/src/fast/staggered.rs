@@ -38,9 +38,6 @@ pub(crate) struct Staggered {
     storage: Vec<f64>,
     /// Index of the first element in `storage`.
     start: usize,
-    /// The line of its page the first element lies on ([`line_of`]), for the tests.
-    #[cfg(test)]
-    line: usize,
 }
 
 /// The line of its page on which the `made`-th array starts.
@@ -48,17 +45,32 @@ fn line_of(made: usize) -> usize {
     made * LINE_STRIDE % LINES_PER_PAGE
 }
 
+/// The line of its page on which the next array starts.
+fn next_line() -> usize {
+    line_of(ARRAYS_MADE.fetch_add(1, Ordering::Relaxed))
+}
+
 impl Staggered {
     /// `n` zeros.
     pub(crate) fn zeros(n: usize) -> Staggered {
-        let mut array = Staggered::empty_for(n);
+        Staggered::zeros_on(n, next_line())
+    }
+
+    /// `n` zeros starting on line `line` of their page.
+    fn zeros_on(n: usize, line: usize) -> Staggered {
+        let mut array = Staggered::empty_on(n, line);
         array.storage.resize(array.start + n, 0.0);
         array
     }
 
     /// A copy of `values`.
     pub(crate) fn copy_of(values: &[f64]) -> Staggered {
-        let mut array = Staggered::empty_for(values.len());
+        Staggered::copy_on(values, next_line())
+    }
+
+    /// A copy of `values` starting on line `line` of its page.
+    fn copy_on(values: &[f64], line: usize) -> Staggered {
+        let mut array = Staggered::empty_on(values.len(), line);
         array.storage.resize(array.start, 0.0);
         array.storage.extend_from_slice(values);
         array
@@ -70,20 +82,14 @@ impl Staggered {
         self.storage.capacity() - self.storage.len()
     }
 
-    /// An empty array with room for the padding, `n` elements and the gap, its start chosen.
-    fn empty_for(n: usize) -> Staggered {
+    /// An empty array with room for the padding, `n` elements and the gap, its start on line `line`.
+    fn empty_on(n: usize, line: usize) -> Staggered {
         let storage: Vec<f64> = Vec::with_capacity(PAGE_BYTES / F64_BYTES + n + GAP);
-        let line = line_of(ARRAYS_MADE.fetch_add(1, Ordering::Relaxed));
         let wanted = line * LINE_BYTES;
         let address = storage.as_ptr() as usize % PAGE_BYTES;
         // Both are multiples of 8 (the allocation is aligned for f64), so this is a whole count.
         let start = (wanted + PAGE_BYTES - address) % PAGE_BYTES / F64_BYTES;
-        Staggered {
-            storage,
-            start,
-            #[cfg(test)]
-            line,
-        }
+        Staggered { storage, start }
     }
 }
 
@@ -113,8 +119,6 @@ impl Default for Staggered {
         Staggered {
             storage: Vec::new(),
             start: 0,
-            #[cfg(test)]
-            line: 0,
         }
     }
 }
@@ -141,14 +145,23 @@ mod tests {
         // Whatever the allocator's alignment of each allocation, the first element lies on the line
         // chosen for it.
         let values: Vec<f64> = (0..40_000).map(|i| i as f64 * 0.5).collect();
-        let arrays: Vec<Staggered> = (0..8)
-            .flat_map(|_| [Staggered::copy_of(&values), Staggered::zeros(values.len())])
+        let arrays: Vec<(Staggered, usize)> = (0..8)
+            .flat_map(|k| {
+                let (copy, zeros) = (line_of(2 * k), line_of(2 * k + 1));
+                [
+                    (Staggered::copy_on(&values, copy), copy),
+                    (Staggered::zeros_on(values.len(), zeros), zeros),
+                ]
+            })
             .collect();
-        for array in arrays.iter().chain([&arrays[0].clone()]) {
-            assert_eq!(
-                array.as_ptr() as usize % PAGE_BYTES,
-                array.line * LINE_BYTES
-            );
+        for (array, line) in &arrays {
+            assert_eq!(array.as_ptr() as usize % PAGE_BYTES, line * LINE_BYTES);
+        }
+        let arrays: Vec<Staggered> = arrays.into_iter().map(|(array, _)| array).collect();
+        // A clone starts on a line too, the next one counted.
+        let clone = arrays[0].clone();
+        assert_eq!(clone.as_ptr() as usize % LINE_BYTES, 0);
+        for array in arrays.iter().chain([&clone]) {
             assert_eq!(array.len(), values.len());
             assert!(array.spare_capacity() >= GAP);
         }

@@ -25,26 +25,11 @@
 //!
 //! Nothing here knows what a sub-step is, so the items of several sub-steps, one after another, make a
 //! schedule too: each sub-step then runs its own depth of rows behind the one before, and a row is
-//! read from memory once for all of them (`Simulation::pipelined_step`). The order above covers what
+//! read from memory once for all of them (`Simulation::whole_step`). The order above covers what
 //! items touch through their rows; what they share otherwise (the attachments' buffers of the pins'
 //! positions) is checked on the schedule where it is used (`grid_step.rs`), except for opposed
 //! parts (below), which the solver uses only where every attachment reads its own row's pins, so
 //! that the buffers follow the rows' order.
-//!
-//! A *chain* runs such sequences on threads instead of cutting the rows: a whole step's sub-steps are
-//! cut into *links* of a few sub-steps each, link `k` going to thread `k mod threads`, each link a
-//! wavefront of one part over all the rows, run as if its items followed link `k − 1`'s in one
-//! wavefront. Link `k`'s items lag link `k − 1`'s first by `D = ` that link's depth, so link `k`'s step
-//! `t` is the joint step `t + D` of link `k − 1`; before it, link `k` waits until link `k − 1` has
-//! finished its steps through `t + D` ([`Wavefront::run_link`]). Two strips that share a row, of an
-//! earlier link's item and a later one's, run at joint steps in that order (the inequality above, on
-//! the joint lags), so the earlier one has finished first: by the wait for neighbouring links, by the
-//! waits of the links between them (each finished its steps through the later strip's joint step only
-//! after the link before it had), or, on the same thread, because links run there in order. No seams
-//! run on one thread while the others wait, so a link can hold as many sub-steps as one thread's
-//! cache allows however few rows each thread would get; but the thread after reads each row from the
-//! other core a link's depth of rows later, which on a 2-core virtual machine cost as much as
-//! reading it from memory.
 //!
 //! Two *opposed parts* keep each of two threads on its own rows without seams. Each strip goes to the
 //! part that holds its first row; one part sweeps its rows downwards as above, the other upwards
@@ -104,49 +89,6 @@ impl Wavefront {
         }
     }
 
-    /// Steps of a wavefront of one part: the last item's last row runs at step `rows − 1 + lag`.
-    pub fn steps(&self) -> usize {
-        self.rows + self.lags.last().copied().unwrap_or(0)
-    }
-
-    /// Runs `work(item, last_row)` for every strip on this thread, in wavefront order, as link `link`
-    /// of a chain (see the module documentation): before each step `t` it waits until link `link − 1`,
-    /// whose schedule is `previous`, has finished its steps through `t + previous.depth()`, and after
-    /// it says so in `progress`'s counter `link` (reset for the chain's links beforehand,
-    /// [`Progress::reset_links`]). Every link must run on a thread of its own or after the links before
-    /// it on the same thread; if a link panics, the links waiting for it panic too.
-    pub fn run_link(
-        &self,
-        link: usize,
-        previous: Option<&Wavefront>,
-        progress: &Progress,
-        mut work: impl FnMut(usize, usize),
-    ) {
-        debug_assert_eq!(link > 0, previous.is_some());
-        let poison = progress.poison_if_unwinding();
-        // The steps link `link − 1` was last seen to have finished.
-        let mut seen = 0;
-        let before_step = |t: usize| {
-            // Steps `0..t` are done.
-            progress.publish(link, t);
-            if let Some(previous) = previous {
-                let needed = previous.finished_before(t);
-                if seen < needed {
-                    seen = progress.wait_at_least(link - 1, needed);
-                }
-            }
-        };
-        self.sweep(|_| 0..self.rows, before_step, &mut work);
-        progress.publish(link, self.steps());
-        poison.disarm();
-    }
-
-    /// How many of its steps this wavefront, a chain's link, must have finished before the next link
-    /// starts its step `t`: those through the joint step `t + depth` (see the module documentation).
-    fn finished_before(&self, t: usize) -> usize {
-        (t + self.depth() + 1).min(self.steps())
-    }
-
     /// Whether `parts` parts leave every part at least `2·depth` rows (and at least one), so that the
     /// seams are disjoint.
     pub fn fits(&self, parts: usize) -> bool {
@@ -178,7 +120,6 @@ impl Wavefront {
                 };
                 first..last.max(first)
             },
-            |_| {},
             work,
         );
     }
@@ -190,19 +131,13 @@ impl Wavefront {
         let cut = self.cut(seam, parts);
         self.sweep(
             |i| cut - self.lags[i]..cut + self.lags[i] + self.spans[i],
-            |_| {},
             work,
         );
     }
 
-    /// Steps `t` from the first to the last, running `before_step(t)` and then item `i` on row `t − lagᵢ`
-    /// where that row lies in `rows_of(i)`.
-    fn sweep(
-        &self,
-        rows_of: impl Fn(usize) -> Range<usize>,
-        mut before_step: impl FnMut(usize),
-        mut work: impl FnMut(usize, usize),
-    ) {
+    /// Steps `t` from the first to the last, running item `i` on row `t − lagᵢ` where that row lies in
+    /// `rows_of(i)`.
+    fn sweep(&self, rows_of: impl Fn(usize) -> Range<usize>, mut work: impl FnMut(usize, usize)) {
         let ranges: Vec<Range<usize>> = (0..self.lags.len()).map(rows_of).collect();
         let steps = ranges
             .iter()
@@ -212,7 +147,6 @@ impl Wavefront {
             .reduce(|a, b| a.start.min(b.start)..a.end.max(b.end));
         let Some(steps) = steps else { return };
         for t in steps {
-            before_step(t);
             for (i, (rows, &lag)) in ranges.iter().zip(&self.lags).enumerate() {
                 if let Some(row) = t.checked_sub(lag).filter(|row| rows.contains(row)) {
                     work(i, row);
@@ -361,7 +295,7 @@ impl Wavefront {
 
     /// Runs `work(item, last_row)` for part `part` (0 or 1) of `plan` in its order, waiting for the
     /// other part where `plan` says and telling it how far this one has got in `progress`'s counter
-    /// `part` (both counters reset beforehand, [`Progress::reset_links`]). The two parts must run at
+    /// `part` (both counters reset beforehand, [`Progress::reset_counters`]). The two parts must run at
     /// once, on threads of their own; if one panics, the other panics too.
     pub fn run_opposed_part(
         &self,
@@ -484,81 +418,6 @@ pub(crate) mod tests {
         assert!(parallel_cases > 10, "the parallel schedules are exercised");
     }
 
-    /// For a chain of `links` on `threads` threads (link `k` on thread `k mod threads`), a function of
-    /// `(link, step)` giving, per earlier link, how many of its steps have surely finished when that
-    /// link starts that step, by the waits of [`Wavefront::run_link`] and the order of each thread's
-    /// links: the link before has finished [`Wavefront::finished_before`] of its steps; a link that has
-    /// started a step started after the links before it on its thread and after its own wait there.
-    fn chain_finished(
-        links: &[Wavefront],
-        threads: usize,
-    ) -> impl Fn(usize, usize) -> Vec<usize> + '_ {
-        move |link, step| {
-            let mut finished = vec![0; link];
-            if let Some(before) = link.checked_sub(1) {
-                finished[before] = links[before].finished_before(step);
-            }
-            for k in (0..link).filter(|k| k % threads == link % threads) {
-                finished[k] = links[k].steps();
-            }
-            for j in (0..link).rev() {
-                if finished[j] == 0 {
-                    continue;
-                }
-                // Link `j` started its step `finished[j] − 1`.
-                if let Some(before) = j.checked_sub(1) {
-                    let needed = links[before].finished_before(finished[j] - 1);
-                    finished[before] = finished[before].max(needed);
-                }
-                for k in (0..j).filter(|k| k % threads == j % threads) {
-                    finished[k] = links[k].steps();
-                }
-            }
-            finished
-        }
-    }
-
-    /// For a chain of `links` on `threads` threads: whether strip `a` surely runs before strip `b`, each
-    /// given as (link, item of the link, last row): earlier in the same link's sweep, or in an earlier
-    /// link at a step that link has surely finished when `b`'s link starts `b`'s step, with `slack`
-    /// steps to spare (0: as the waits are; 1: were each wait a step shorter).
-    pub(crate) fn chain_before(
-        links: &[Wavefront],
-        threads: usize,
-        slack: usize,
-    ) -> impl Fn((usize, usize, usize), (usize, usize, usize)) -> bool + '_ {
-        let finished = chain_finished(links, threads);
-        move |(la, ia, ra), (lb, ib, rb)| {
-            let (ta, tb) = (ra + links[la].lags[ia], rb + links[lb].lags[ib]);
-            if la == lb {
-                (ta, ia) < (tb, ib)
-            } else {
-                la < lb && ta + slack < finished(lb, tb)[la]
-            }
-        }
-    }
-
-    /// The items of `spans` cut into links of the given numbers of items, and per item of the whole its
-    /// link and its index in the link.
-    fn links_of(
-        spans: &[usize],
-        sizes: &[usize],
-        rows: usize,
-    ) -> (Vec<Wavefront>, Vec<(usize, usize)>) {
-        let mut first = 0;
-        let mut place = Vec::new();
-        let links = sizes
-            .iter()
-            .enumerate()
-            .map(|(link, &size)| {
-                place.extend((0..size).map(|i| (link, i)));
-                first += size;
-                Wavefront::new(spans[first - size..first].to_vec(), rows)
-            })
-            .collect();
-        (links, place)
-    }
-
     /// Every pair of strips that share a row, the later in the joint order of `spans` (item `j > i`),
     /// as `(i, row_i, j, row_j)`.
     fn sharing_pairs(spans: &[usize], rows: usize) -> Vec<(usize, usize, usize, usize)> {
@@ -579,118 +438,6 @@ pub(crate) mod tests {
     /// batches and its end; `substeps` of them one after another.
     fn substep_spans(substeps: usize) -> Vec<usize> {
         [1, 0, 0, 0, 2, 2, 1, 1, 1, 1, 1, 1, 0, 0, 0].repeat(substeps)
-    }
-
-    /// In a chain, every pair of strips that share a row runs in the joint order, by the waits alone
-    /// (checked on the guarantees of [`chain_finished`], without timing): links of one to five
-    /// sub-steps, even and uneven, on two to four threads, on short and tall grids; a wait one step
-    /// shorter breaks it.
-    #[test]
-    fn in_a_chain_every_pair_of_strips_sharing_a_row_runs_in_the_joint_order() {
-        let per_substep = substep_spans(1).len();
-        let mut shorter_broken = false;
-        for sizes in [
-            vec![1; 6],
-            vec![2, 2, 2],
-            vec![3, 3],
-            vec![5, 1],
-            vec![1, 2, 3],
-        ] {
-            let spans = substep_spans(sizes.iter().sum());
-            let sizes: Vec<usize> = sizes.iter().map(|s| s * per_substep).collect();
-            for rows in [5, 31, 90] {
-                let (links, place) = links_of(&spans, &sizes, rows);
-                // Item `item` of the whole on row `row` as (link, item of the link, row).
-                let strip = |item: usize, row: usize| (place[item].0, place[item].1, row);
-                for threads in 2..=4 {
-                    let pairs = sharing_pairs(&spans, rows);
-                    let ordered = |slack: usize| {
-                        let before = chain_before(&links, threads, slack);
-                        pairs
-                            .iter()
-                            .all(|&(i, ri, j, rj)| before(strip(i, ri), strip(j, rj)))
-                    };
-                    assert!(
-                        ordered(0),
-                        "links {sizes:?} over {rows} rows on {threads} threads"
-                    );
-                    shorter_broken |= !ordered(1);
-                }
-            }
-        }
-        assert!(
-            shorter_broken,
-            "a wait one step shorter would do: the check cannot fail"
-        );
-    }
-
-    /// A chain run on real threads, each link waiting as [`Wavefront::run_link`] does, runs every strip
-    /// once and every pair that shares a row in the joint order: links of one, two and three
-    /// sub-steps on two and three threads, with a slow leading link and with a slow following one.
-    #[test]
-    fn a_chain_on_threads_runs_every_pair_sharing_a_row_in_the_joint_order() {
-        use std::sync::Mutex;
-        use std::sync::atomic::{AtomicUsize, Ordering};
-        let per_substep = substep_spans(1).len();
-        let rows = 40;
-        for sizes in [vec![1; 4], vec![2, 1, 2], vec![3, 3]] {
-            let spans = substep_spans(sizes.iter().sum());
-            let sizes: Vec<usize> = sizes.iter().map(|s| s * per_substep).collect();
-            let (links, place) = links_of(&spans, &sizes, rows);
-            for threads in [2, 3] {
-                for slow_link in [0, 1] {
-                    let mut progress = Progress::default();
-                    progress.reset_links(links.len());
-                    let clock = AtomicUsize::new(0);
-                    let log: Vec<Mutex<Vec<usize>>> = (0..spans.len() * rows)
-                        .map(|_| Mutex::new(Vec::new()))
-                        .collect();
-                    let offsets: Vec<usize> = sizes
-                        .iter()
-                        .scan(0, |first, size| {
-                            *first += size;
-                            Some(*first - size)
-                        })
-                        .collect();
-                    std::thread::scope(|scope| {
-                        for thread in 0..threads {
-                            let (links, progress, clock, log, offsets) =
-                                (&links, &progress, &clock, &log, &offsets);
-                            scope.spawn(move || {
-                                for link in (thread..links.len()).step_by(threads) {
-                                    let previous = link.checked_sub(1).map(|k| &links[k]);
-                                    links[link].run_link(link, previous, progress, |i, row| {
-                                        let slow = if link == slow_link { 400 } else { 0 };
-                                        for _ in 0..(row * 7 + i * 13) % 50 + slow {
-                                            std::hint::spin_loop();
-                                        }
-                                        let now = clock.fetch_add(1, Ordering::SeqCst);
-                                        let item = offsets[link] + i;
-                                        log[item * rows + row].lock().unwrap().push(now);
-                                    });
-                                }
-                            });
-                        }
-                    });
-                    let ran: Vec<usize> = log
-                        .into_iter()
-                        .map(|runs| {
-                            let runs = runs.into_inner().unwrap();
-                            assert_eq!(runs.len(), 1, "every strip runs once");
-                            runs[0]
-                        })
-                        .collect();
-                    for (i, ri, j, rj) in sharing_pairs(&spans, rows) {
-                        assert!(
-                            ran[i * rows + ri] < ran[j * rows + rj],
-                            "links {sizes:?} on {threads} threads: ({i}, {ri}) after ({j}, {rj}) \
-                             ({:?})",
-                            place[i]
-                        );
-                    }
-                }
-            }
-        }
     }
 
     /// The order two opposed parts run their units in when the parts advance as `pick` chooses
@@ -850,7 +597,7 @@ pub(crate) mod tests {
                 let halves = plan.opposed_parts(rows / 2, upward_first);
                 for slow_part in [0, 1] {
                     let mut progress = Progress::default();
-                    progress.reset_links(2);
+                    progress.reset_counters(2);
                     let clock = AtomicUsize::new(0);
                     let log: Vec<Mutex<Vec<usize>>> = (0..spans.len() * rows)
                         .map(|_| Mutex::new(Vec::new()))
