@@ -3,7 +3,9 @@
 //! (times, frame counts, options that do not go together). Nothing here may hang or abort: every
 //! run is given a deadline.
 
-use std::path::PathBuf;
+mod scratch;
+use scratch::Scratch;
+
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -41,15 +43,10 @@ fn assert_one_line_error(args: &[&str], code: i32, needles: &[&str]) {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sheer-bad-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn times_out_of_range_are_refused_before_any_simulation() {
-    let out = scratch("times").join("frame.png");
+    let scratch = Scratch::new("bad-times");
+    let out = scratch.join("frame.png");
     let out = out.to_str().unwrap();
     // 1e9 s at 60 Hz was a loop of 4·10⁹ steps; −5 and NaN silently rendered t = 0.
     for time in ["1e9", "3601", "-1", "-5", "NaN", "inf", "1e300"] {
@@ -142,7 +139,8 @@ fn benchmark_sizes_beyond_the_scene_limits_are_refused_before_any_work() {
 
 #[test]
 fn options_that_do_not_go_together_are_one_line_usage_errors() {
-    let out = scratch("usage").join("frame.png");
+    let scratch = Scratch::new("bad-usage");
+    let out = scratch.join("frame.png");
     let out = out.to_str().unwrap();
     // --frames and --format describe a sequence; with --out they were silently ignored.
     assert_one_line_error(
@@ -191,7 +189,7 @@ fn options_that_do_not_go_together_are_one_line_usage_errors() {
 
 #[test]
 fn bad_scene_values_are_refused_at_once_naming_the_key() {
-    let dir = scratch("scenes");
+    let dir = Scratch::new("bad-scenes");
     let scene = dir.join("scene.toml");
     let out = dir.join("frame.png");
     for (text, key) in [
@@ -233,7 +231,7 @@ fn bad_scene_values_are_refused_at_once_naming_the_key() {
 
 #[test]
 fn images_that_cannot_be_read_are_errors_naming_their_key() {
-    let dir = scratch("images");
+    let dir = Scratch::new("bad-images");
     std::fs::write(
         dir.join("corrupt.png"),
         b"\x89PNG\r\n\x1a\n but no image follows",
@@ -276,7 +274,8 @@ fn images_that_cannot_be_read_are_errors_naming_their_key() {
 fn a_backend_name_that_is_no_backend_is_one_line() {
     // wgpu skipped the name and searched nothing: "no graphics adapter found for backends
     // Backends(0x0)".
-    let out = scratch("backend").join("frame.png");
+    let scratch = Scratch::new("bad-backend");
+    let out = scratch.join("frame.png");
     let run = Command::new(env!("CARGO_BIN_EXE_sheer"))
         .args(["render", "--out", out.to_str().unwrap()])
         .env("WGPU_BACKEND", "garbage")
@@ -294,7 +293,7 @@ fn a_backend_name_that_is_no_backend_is_one_line() {
 #[test]
 fn a_black_pixel_in_the_thickness_texture_is_named_by_file_and_place() {
     // It multiplies τ1: black would be a hole of zero thickness. The message said only "texel 6".
-    let dir = scratch("black-thickness");
+    let dir = Scratch::new("bad-black-thickness");
     let mut weave = image::RgbImage::from_pixel(4, 3, image::Rgb([255, 255, 255]));
     weave.put_pixel(2, 1, image::Rgb([0, 0, 0]));
     weave.save(dir.join("weave.png")).unwrap();
@@ -347,7 +346,7 @@ fn a_study_into_a_folder_it_cannot_write_is_refused_before_it_runs() {
 fn an_output_that_cannot_be_written_is_refused_before_the_scene_is_simulated() {
     // An hour of simulated flag takes far longer than the deadline: each of these ran it all before
     // failing (`.jpg` is no type `render` writes), or said "File exists" of a file given as a folder.
-    let dir = scratch("outputs");
+    let dir = Scratch::new("bad-outputs");
     let file = dir.join("a-file");
     std::fs::write(&file, "not a folder").unwrap();
     let file = file.to_str().unwrap();
@@ -420,5 +419,4 @@ fn an_output_that_cannot_be_written_is_refused_before_the_scene_is_simulated() {
         &["columns"],
     );
     assert_eq!(std::fs::read_to_string(&kept).unwrap(), "earlier frame");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,5 +1,8 @@
 //! Workspace-level tests: the `sheer` binary run as a user runs it.
 
+mod scratch;
+use scratch::Scratch;
+
 use std::process::Command;
 
 fn sheer(args: &[&str]) -> std::process::Output {
@@ -172,7 +175,7 @@ fn bad_arguments_are_one_line_errors_with_a_failing_status() {
 
 #[test]
 fn simulate_writes_one_obj_per_frame() {
-    let dir = std::env::temp_dir().join(format!("sheer-simulate-{}", std::process::id()));
+    let dir = Scratch::new("simulate");
     sheer_ok(&[
         "simulate",
         "--frames",
@@ -209,8 +212,7 @@ fn simulate_writes_one_obj_per_frame() {
 
 #[test]
 fn bad_scene_files_are_one_line_errors_naming_the_problem() {
-    let dir = std::env::temp_dir().join(format!("sheer-badscene-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("badscene");
     let scene = dir.join("bad.toml");
     for (text, needle) in [
         ("[light]\nflux = -3.0\n", "light.flux"),
@@ -256,8 +258,7 @@ fn bad_scene_files_are_one_line_errors_naming_the_problem() {
 /// names the frame and says what keeps the divergence away.
 #[test]
 fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
-    let dir = std::env::temp_dir().join(format!("sheer-wide-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("wide");
     let scene = dir.join("wide.scene.toml");
     std::fs::write(&scene, "[flag]\ncolumns = 1024\n").unwrap();
     let stderr = sheer_error(&[
@@ -289,7 +290,6 @@ fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
         "{stderr}"
     );
     assert!(!stderr.contains("last good state"), "{stderr}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A flag in a 60 m/s wind trips the speed limit: more sub-steps cannot help there (100 to 1000 of them
@@ -297,7 +297,7 @@ fn a_diverging_flag_is_one_line_naming_the_frame_and_the_remedy() {
 /// does not advise sub-steps.
 #[test]
 fn a_flag_too_fast_for_the_speed_limit_is_told_about_the_speed_limit() {
-    let dir = scratch("storm");
+    let dir = Scratch::new("cli-storm");
     let scene = dir.join("storm.scene.toml");
     std::fs::write(&scene, "[simulation.wind]\nvelocity = [60.0, 0.0, 0.0]\n").unwrap();
     let stderr = sheer_error(&[
@@ -316,15 +316,6 @@ fn a_flag_too_fast_for_the_speed_limit_is_told_about_the_speed_limit() {
             && !stderr.contains("sub-steps"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
-/// A fresh, empty folder under the system's temporary folder.
-fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("sheer-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// The names in `dir`, sorted.
@@ -384,7 +375,7 @@ fn long_simulation(dir: &std::path::Path) -> std::process::Child {
 #[test]
 fn an_interrupted_sequence_leaves_only_whole_frames_and_says_how_far_it_got() {
     for trial in 0..3 {
-        let dir = scratch(&format!("interrupt-{trial}"));
+        let dir = Scratch::new(&format!("cli-interrupt-{trial}"));
         let child = long_simulation(&dir);
         let status = Command::new("kill")
             .args(["-INT", &child.id().to_string()])
@@ -406,9 +397,8 @@ fn an_interrupted_sequence_leaves_only_whole_frames_and_says_how_far_it_got() {
             assert_eq!(name, &format!("frame_{frame:06}.obj"));
             whole_obj_vertices(&dir.join(name));
         }
-        std::fs::remove_dir_all(&dir).unwrap();
     }
-    let dir = scratch("killed");
+    let dir = Scratch::new("cli-killed");
     let mut child = long_simulation(&dir);
     child.kill().unwrap();
     child.wait().unwrap();
@@ -432,14 +422,13 @@ fn an_interrupted_sequence_leaves_only_whole_frames_and_says_how_far_it_got() {
         dir.to_str().unwrap(),
     ]);
     assert_eq!(names_in(&dir), ["frame_0000.obj", "frame_0001.obj"]);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A second sequence into a folder of frames is refused, naming --overwrite, and changes nothing;
 /// with --overwrite the old frames go first, so no stale frame sits beside the new ones.
 #[test]
 fn a_sequence_into_a_folder_of_frames_is_refused_unless_overwritten() {
-    let dir = scratch("overwrite");
+    let dir = Scratch::new("cli-overwrite");
     let out = dir.to_str().unwrap();
     sheer_ok(&["simulate", "--frames", "20", "--out-dir", out]);
     std::fs::write(dir.join("notes.txt"), "mine").unwrap();
@@ -455,7 +444,6 @@ fn a_sequence_into_a_folder_of_frames_is_refused_unless_overwritten() {
         .chain(["notes.txt".to_string()])
         .collect();
     assert_eq!(names_in(&dir), expected);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// One clock: frame k of a sequence is the scene after round(T·fps) + k frames of 1/fps, whatever
@@ -463,7 +451,7 @@ fn a_sequence_into_a_folder_of_frames_is_refused_unless_overwritten() {
 /// are written in their shortest round-trip form), as frames 30–32 of a run from 0.
 #[test]
 fn a_sequence_from_a_later_time_continues_the_same_flag_bit_for_bit() {
-    let dir = scratch("clock");
+    let dir = Scratch::new("cli-clock");
     let (from_zero, from_half) = (dir.join("zero"), dir.join("half"));
     sheer_ok(&[
         "simulate",
@@ -491,14 +479,13 @@ fn a_sequence_from_a_later_time_continues_the_same_flag_bit_for_bit() {
     // Frame 0 is the flag at rest, the hoist pinned at the top.
     let rest = whole_obj_vertices(&from_zero.join("frame_0000.obj"));
     assert_eq!(rest[0], "v 0.0 0.8 0.0");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn study_choose_quick_writes_the_choice_and_its_sweep() {
     // The quick study (12 × 9 flag, coverage over 0.25–0.5 s) end to end through the binary: a few
     // seconds. A generous coverage budget so some setting meets it and the choice file is written.
-    let dir = std::env::temp_dir().join(format!("sheer-study-{}", std::process::id()));
+    let dir = Scratch::new("study");
     // A folder holding a full study's choice (as the committed docs/ does) is refused by --quick, and
     // left as it was; --force overrides.
     std::fs::create_dir_all(&dir).unwrap();
@@ -577,7 +564,6 @@ fn study_choose_quick_writes_the_choice_and_its_sweep() {
     }));
     let md = std::fs::read_to_string(dir.join("work-precision.md")).unwrap();
     assert!(md.contains("## Budget, choice and why"));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -650,8 +636,7 @@ fn slab_rows(out: &std::process::Output) -> Vec<Vec<f64>> {
 
 #[test]
 fn slab_all_orders_matches_the_solver_within_the_tables_error() {
-    let dir = std::env::temp_dir().join(format!("sheer-slab-all-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("slab-all");
     let input = dir.join("rows.csv");
     let rows = [
         [2.0, 1.0, 0.5, 0.5],
@@ -706,13 +691,11 @@ fn slab_all_orders_matches_the_solver_within_the_tables_error() {
     ]));
     assert_eq!(literal[0][5], all[0][5] * 0.5);
     assert_eq!(literal[0][6], all[0][6] * 0.5);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn slab_refuses_a_bad_model_a_bad_table_and_rows_outside_the_table() {
-    let dir = std::env::temp_dir().join(format!("sheer-slab-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("slab-bad");
     let input = dir.join("rows.csv");
     std::fs::write(&input, "2,1,0.5,0.5\n").unwrap();
     let path = input.to_str().unwrap();
@@ -800,13 +783,12 @@ fn slab_refuses_a_bad_model_a_bad_table_and_rows_outside_the_table() {
         1,
         &["tau1 = 1e308"],
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn the_wrap_scene_wraps_the_flag_round_the_pole_without_passing_through() {
     use sheer_cloth::glam::DVec3;
-    let dir = scratch("wrap");
+    let dir = Scratch::new("cli-wrap");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/wrap.scene.toml");
     let frames = 240;
     sheer_ok(&[
@@ -863,5 +845,4 @@ fn the_wrap_scene_wraps_the_flag_round_the_pole_without_passing_through() {
     }
     // The flag does wrap: it lies against the pole in most frames.
     assert!(touching_frames > frames / 2, "{touching_frames} frames");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

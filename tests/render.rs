@@ -2,7 +2,10 @@
 //! a static sheet checked against the model by hand, the `sheer slab` command, and `sheer bench
 //! render`'s CSV.
 
-use std::path::{Path, PathBuf};
+mod scratch;
+use scratch::Scratch;
+
+use std::path::Path;
 
 use std::process::{Command, Output};
 
@@ -21,12 +24,6 @@ fn sheer_ok(args: &[&str]) -> Output {
         String::from_utf8_lossy(&out.stderr)
     );
     out
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sheer-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 fn read_exr(path: &Path) -> image::Rgba32FImage {
@@ -61,7 +58,7 @@ const STATIC_SHEET: &str = "[static_sheet]\nsize = [1.0, 1.0]\nalbedo = [0.8, 0.
 
 #[test]
 fn figure2_panels_differ_as_the_paper_says() {
-    let dir = scratch("figure2");
+    let dir = Scratch::new("test-figure2");
     let out = dir.join("figure2.png");
     let linear = dir.join("linear");
     sheer_ok(&[
@@ -185,7 +182,7 @@ fn figure2_panels_differ_as_the_paper_says() {
 
 #[test]
 fn a_default_scene_frame_shows_the_flag_where_it_should_be() {
-    let dir = scratch("frame");
+    let dir = Scratch::new("test-frame");
     let out = dir.join("frame.exr");
     sheer_ok(&["render", "--out", out.to_str().unwrap(), "--time", "1"]);
     let image = read_exr(&out);
@@ -215,7 +212,7 @@ fn the_light_marker_shows_through_the_cloth_when_the_light_is_behind_it() {
     // centre. With the marker on, the centre differs from the marker-free render by exactly
     // α·(L_marker − L_background) (the marker takes the background's place under the sheet, eq. 9),
     // not by the whole marker, as it would if it were drawn over the cloth.
-    let dir = scratch("marker");
+    let dir = Scratch::new("test-marker");
     let behind = STATIC_SHEET.replace("phase = 0.0", &format!("phase = {}", std::f32::consts::PI));
     let without = render_scene_to_exr(&dir, "without", &behind, &[]);
     let with = render_scene_to_exr(
@@ -250,7 +247,7 @@ fn a_static_sheet_renders_as_the_model_predicts_by_hand() {
     // A flat sheet facing the camera, light straight in front of it at 1 m: μ = μ0 ≈ 1 at the centre.
     // The paper's model: single scattering.
     let single = format!("{STATIC_SHEET}[shading]\nscattering = \"single\"\n");
-    let image = render_scene_to_exr(&scratch("static"), "sheet", &single, &[]);
+    let image = render_scene_to_exr(&Scratch::new("test-static"), "sheet", &single, &[]);
     let centre = image.get_pixel(256, 256).0;
     // By hand: E = Φ/(4πr²) normal to the beam; μ = μ0 = 1; τ1 = 2, Λ = 0.8;
     // L+ = Λ/(4π) E μ0/(μ+μ0) (1 − e^(−τ1(1/μ+1/μ0))) (eq. 4), α = e^(−τ1/μ), L = 0.3 α + L+ (eq. 9).
@@ -279,7 +276,7 @@ fn a_light_on_a_vertex_gives_no_nan_pixel() {
     // The light orbit puts the light at (0, 0, 1), exactly on the sheet's centre vertex: there r = 0 and
     // the lit side has no direction, so the vertex path must deliver no irradiance rather than 0/0.
     let image = render_scene_to_exr(
-        &scratch("light-on-vertex"),
+        &Scratch::new("test-light-on-vertex"),
         "sheet",
         "[static_sheet]\nsize = [1.0, 1.0]\ncentre = [0.0, 0.0, 1.0]\nsegments = 2\n\
          [shading]\npath = \"vertex\"\n\
@@ -296,7 +293,7 @@ fn a_light_on_a_vertex_gives_no_nan_pixel() {
 
 #[test]
 fn slab_command_checks_the_model_from_outside() {
-    let dir = scratch("slab");
+    let dir = Scratch::new("test-slab");
     let input = dir.join("rows.csv");
     std::fs::write(&input, "tau1,albedo,mu0,mu\n2,1,0.5,0.5\n0.1,0.9,1,0.25\n").unwrap();
     let out = sheer_ok(&["slab", input.to_str().unwrap()]);
@@ -332,7 +329,7 @@ fn the_all_orders_scene_key_renders_what_sheer_slab_computes() {
     // The static sheet of the test above with `shading.scattering = "all-orders"`: at the centre
     // μ = μ0 ≈ 1, so the pixel is 0.3 α + E·L+ with L+ from `sheer slab --model all-orders` at
     // (τ1, Λ, μ0, μ) = (2, 0.8, 1, 1), and brighter than single scattering.
-    let dir = scratch("all-orders");
+    let dir = Scratch::new("test-all-orders");
     let render = |scattering: &str| {
         let toml = format!("{STATIC_SHEET}[shading]\nscattering = \"{scattering}\"\n");
         render_scene_to_exr(&dir, scattering, &toml, &[])
@@ -427,7 +424,7 @@ fn display_difference(a: &image::Rgba32FImage, b: &image::Rgba32FImage) -> (f64,
 /// whose single-scattering part is interpolated too.
 #[test]
 fn all_orders_table_per_vertex_sits_between_per_fragment_and_the_per_vertex_path() {
-    let dir = scratch("table-lookup");
+    let dir = Scratch::new("test-table-lookup");
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     for time in ["1", "7"] {
         let render = |name: &str, settings: &str| {
@@ -460,7 +457,7 @@ fn all_orders_table_per_vertex_sits_between_per_fragment_and_the_per_vertex_path
 #[test]
 fn a_sequence_starts_at_its_time_and_its_first_frame_is_that_single_frame() {
     // `--time` was ignored for sequences: every sequence started at t = 0.
-    let dir = scratch("sequence-time");
+    let dir = Scratch::new("test-sequence-time");
     let render = |extra: &[&str]| {
         let mut args = vec!["render", "--format", "exr"];
         args.extend_from_slice(extra);
@@ -500,7 +497,7 @@ fn output_that_cannot_be_written_is_a_one_line_error() {
     if !full.exists() {
         return; // not Linux
     }
-    let dir = scratch("full-disk");
+    let dir = Scratch::new("test-full-disk");
     let scene = dir.join("small.toml");
     std::fs::write(
         &scene,
@@ -547,7 +544,6 @@ fn output_that_cannot_be_written_is_a_one_line_error() {
         .output()
         .unwrap();
     one_line_error(&out, "cannot write to standard output");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `sheer bench render --csv` prints its documented header and one row per case; every time is finite
@@ -628,7 +624,7 @@ fn bench_render_prints_the_documented_csv() {
 /// differs, so the comparison can fail.
 #[test]
 fn an_hour_into_the_scene_the_light_is_where_the_hour_puts_it() {
-    let dir = scratch("one-clock");
+    let dir = Scratch::new("test-one-clock");
     let sheet = "[static_sheet]\nsegments = 4\n[render]\nwidth = 64\nheight = 64\n";
     let at =
         |time: &str| render_scene_to_exr(&dir, &format!("at-{time}"), sheet, &["--time", time]);

@@ -2,6 +2,9 @@
 //! frames, saves a screenshot of the whole window and exits; the screenshot must show the panel and the
 //! flag.
 
+mod scratch;
+use scratch::Scratch;
+
 use std::process::Command;
 use std::sync::Mutex;
 
@@ -11,8 +14,7 @@ static DISPLAY: Mutex<()> = Mutex::new(());
 #[test]
 fn the_window_runs_frames_and_saves_a_screenshot_of_panel_and_flag() {
     let _display = DISPLAY.lock().unwrap_or_else(|e| e.into_inner());
-    let dir = std::env::temp_dir().join(format!("sheer-window-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("window");
     let shot = dir.join("window.png");
     let output = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1280x800x24"])
@@ -117,8 +119,7 @@ fn a_screenshot_that_cannot_be_written_fails_the_scripted_run() {
             .expect("xvfb-run must be installed (Debian package xvfb; .ci/run installs it)")
     };
     // Refused before the window opens: not a PNG name, or no such directory.
-    let dir = std::env::temp_dir().join(format!("sheer-window-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("window-bad");
     let jpg = dir.join("window.jpg");
     let missing = dir.join("absent").join("window.png");
     for (shot, needle) in [
@@ -141,7 +142,6 @@ fn a_screenshot_that_cannot_be_written_fails_the_scripted_run() {
         );
     }
     assert!(!jpg.exists(), "a refused screenshot left a file");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// On a screen too small to leave room for the image beside the panel, a scripted screenshot is
@@ -149,8 +149,7 @@ fn a_screenshot_that_cannot_be_written_fails_the_scripted_run() {
 #[test]
 fn a_window_too_small_for_the_image_says_so() {
     let _display = DISPLAY.lock().unwrap_or_else(|e| e.into_inner());
-    let dir = std::env::temp_dir().join(format!("sheer-window-small-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("window-small");
     let shot = dir.join("small.png");
     let out = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 200x150x24"])
@@ -167,5 +166,4 @@ fn a_window_too_small_for_the_image_says_so() {
         "{stderr}"
     );
     assert!(!shot.exists(), "a screenshot without the image was saved");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

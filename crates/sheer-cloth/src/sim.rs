@@ -445,7 +445,7 @@ impl Simulation {
         Ok(info)
     }
 
-    /// [`step`](Simulation::step) through the fast paths where the cloth has them (`Path::Fast`), or
+    /// [`step`](Simulation::step) through the fast paths where the cloth has them (`Path::Fast(_)`), or
     /// through the plain code everywhere (`Path::Plain`, which the fast paths are tested against);
     /// with the schedule of a grid's step where it went whole
     /// ([`whole_step`](Simulation::whole_step)), for the tests to know what they compared.

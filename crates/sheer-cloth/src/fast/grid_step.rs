@@ -560,16 +560,21 @@ impl Simulation {
     ///    step) the cloth stays in the caches from pass to pass: no wavefronts.
     /// 2. On a team in equal parts (`TEAM_CLAIMS_FROM_PARTICLES_PER_THREAD`), the pipeline: one
     ///    hand-off, each thread on its own rows.
-    /// 3. Else wavefronts, as many sub-steps a pass as `WAVEFRONT_WINDOW_BYTES` holds, cut into one part
-    ///    per thread where every part has room for its seams (`…_ROWS_PER_DEPTH` rows per row of
-    ///    depth); on a team of two whose attachments read their own rows' pins, as two opposed parts
-    ///    where those hold more sub-steps a pass than parts would.
+    /// 3. Else wavefronts, cut into one part per thread: as many sub-steps a pass as
+    ///    `WAVEFRONT_WINDOW_BYTES` holds, or fewer, down to one, until every part has room for its
+    ///    seams (`…_ROWS_PER_DEPTH` rows per row of depth). On a team of two whose attachments read
+    ///    their own rows' pins, two opposed parts instead where those hold more sub-steps a pass than
+    ///    parts would. A whole step goes in wavefronts only where the attachments let the prediction
+    ///    into them (`WaveItem::of_substep`).
     /// 4. Else pass by pass ([`Schedule::Passes`]); a whole step then goes sub-step by sub-step.
     ///
-    /// The other sweeps force a schedule, for the tests; one that cannot run a lone sub-step panics.
-    /// Only the pipeline's stages are kept, in `pipeline_plan`, built again when what they depend on
-    /// changed.
-    pub(crate) fn plan_grid_schedule(
+    /// The other sweeps force a schedule, for the tests. A whole step that cannot go as forced goes
+    /// sub-step by sub-step, except that opposed parts without a team of two, and a pipeline whose
+    /// parts do not fit the rows, panic. A lone sub-step panics where forced wavefront parts do not
+    /// fit or the pipeline has no team in equal parts (or its parts do not fit); opposed parts run
+    /// it pass by pass. Only the pipeline's stages are kept, in `pipeline_plan`, built again when
+    /// what they depend on changed.
+    fn plan_grid_schedule(
         &mut self,
         sweep: GridSweep,
         iterations: u32,
@@ -729,6 +734,7 @@ impl Simulation {
         let parts = match (sweep, equal_parts) {
             (GridSweep::BatchByBatch, _) => return Schedule::BatchByBatch,
             (GridSweep::Pipeline | GridSweep::Auto, Some(parts)) => parts,
+            // A whole step falls back to sub-steps, the first of which panics here.
             (GridSweep::Pipeline, None) if !whole_step => {
                 panic!("the pipeline needs a team in equal parts")
             }
@@ -914,10 +920,11 @@ impl Simulation {
             // SAFETY: the strips of a batch touch disjoint particle ranges (checked by the
             // `grid_strips_*` tests); a pass over rows gives each row to one part, the pipeline's parts
             // touch no row at once that another part touches (`Pipeline`), the wavefront's concurrent
-            // parts and seams touch disjoint rows (`Wavefront::fits`), and two opposed parts touch a row at once only with units of the same item, which write nothing in common
-            // (a batch's strips share no particle, as in a pass over them; two cell rows of the wind
-            // only read the particle row between them) (`Wavefront::run_opposed_part`); each strip owns
-            // its constraints' multipliers.
+            // parts and seams touch disjoint rows (`Wavefront::fits`), and two opposed parts touch a
+            // row at once only with units of the same item, which write nothing in common (a batch's
+            // strips share no particle, as in a pass over them; two cell rows of the wind only read
+            // the particle row between them) (`Wavefront::run_opposed_part`); each strip owns its
+            // constraints' multipliers.
             unsafe {
                 project_strips::<PBD, MULTIPLIERS>(
                     strips,
@@ -1587,29 +1594,44 @@ mod tests {
         state_bits(&sim)
     }
 
+    /// How a step went.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum LastStep {
+        /// Sub-step by sub-step.
+        SubSteps,
+        /// Whole, as one pass of the pipeline.
+        Pipeline,
+        /// Whole, as wavefronts of at most this many sub-steps a pass, shared out this way.
+        Wavefronts(usize, PassesGo),
+    }
+
     /// `frames` frames of `sim` in the schedule `sweep` asks for on a pool of `threads` threads, its
-    /// pole turning a little further and swaying every frame. Returns how the last frame's step went
-    /// whole as wavefronts: the most sub-steps a pass and how the passes shared out the rows (`None`:
-    /// as the pipeline, or sub-step by sub-step).
+    /// pole turning a little further and swaying every frame. Returns how the last frame's step went.
     fn turning_pole(
         sim: &mut Simulation,
         sweep: GridSweep,
         threads: usize,
         frames: usize,
-    ) -> Option<(usize, PassesGo)> {
+    ) -> LastStep {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
         pool.install(|| {
-            let mut last = None;
+            let mut last = LastStep::SubSteps;
             for frame in 0..frames {
                 sim.move_pins(crate::solver::hoist_sway_and_turn(frame))
                     .unwrap();
                 let (_, whole) = sim.step_through(1.0 / 60.0, Path::Fast(sweep)).unwrap();
                 last = match whole {
-                    Some(Schedule::Wavefronts(plan)) => Some((plan.most_per_pass, plan.way)),
-                    _ => None,
+                    None => LastStep::SubSteps,
+                    Some(Schedule::Pipeline) => LastStep::Pipeline,
+                    Some(Schedule::Wavefronts(plan)) => {
+                        LastStep::Wavefronts(plan.most_per_pass, plan.way)
+                    }
+                    Some(Schedule::Passes | Schedule::BatchByBatch) => {
+                        unreachable!("a whole step goes as the pipeline or as wavefronts")
+                    }
                 };
             }
             last
@@ -1617,8 +1639,11 @@ mod tests {
     }
 
     /// The most sub-steps a pass of a whole step in wavefronts ran (0: none ran).
-    fn per_pass(how: Option<(usize, PassesGo)>) -> usize {
-        how.map_or(0, |(per_pass, _)| per_pass)
+    fn per_pass(how: LastStep) -> usize {
+        match how {
+            LastStep::Wavefronts(per_pass, _) => per_pass,
+            LastStep::SubSteps | LastStep::Pipeline => 0,
+        }
     }
 
     /// The grid solver's shared row passes (forces, prediction and the batches along rows in one pass;
@@ -1970,7 +1995,7 @@ mod tests {
         sim.params.wind.velocity = DVec3::new(speed, 0.0, 0.25 * speed);
         sim.params.wind.renewal_interval = held_for(interval, method);
         let how = turning_pole(&mut sim, sweep, threads, frames);
-        let opposed = how.is_some_and(|(_, way)| way == PassesGo::Opposed);
+        let opposed = matches!(how, LastStep::Wavefronts(_, PassesGo::Opposed));
         (state_bits(&sim), (per_pass(how), opposed))
     }
 
@@ -2058,20 +2083,27 @@ mod tests {
                 let (bits, how) = run(GridSweep::Auto, threads);
                 assert!(bits == passes, "{what}: not the bits of pass by pass");
                 match (threads, fewer_in_parts) {
-                    (1, _) => assert_eq!(how, Some((most, PassesGo::InParts(1))), "{what}"),
+                    (1, _) => {
+                        let expected = LastStep::Wavefronts(most, PassesGo::InParts(1));
+                        assert_eq!(how, expected, "{what}");
+                    }
                     (2, Some(true)) => {
-                        assert_eq!(how, Some((most, PassesGo::Opposed)), "{what}");
+                        let expected = LastStep::Wavefronts(most, PassesGo::Opposed);
+                        assert_eq!(how, expected, "{what}");
                         assert!(most > 2, "{what}: {most} sub-steps a pass");
                     }
                     (_, Some(true)) => {
-                        let (per_pass, way) = how.expect("wavefronts");
+                        let LastStep::Wavefronts(per_pass, way) = how else {
+                            panic!("{what}: {how:?}")
+                        };
                         assert_eq!(way, PassesGo::InParts(threads), "{what}");
                         assert!((1..most).contains(&per_pass), "{what}: {per_pass}");
                     }
                     (_, Some(false)) => {
-                        assert_eq!(how, Some((1, PassesGo::InParts(threads))), "{what}")
+                        let expected = LastStep::Wavefronts(1, PassesGo::InParts(threads));
+                        assert_eq!(how, expected, "{what}");
                     }
-                    (_, None) => assert_eq!(how, None, "{what}"),
+                    (_, None) => assert_eq!(how, LastStep::SubSteps, "{what}"),
                 }
             }
         }
@@ -2101,7 +2133,7 @@ mod tests {
                 sim.params.wind.renewal_interval = held_for(2, method);
                 let how = turning_pole(&mut sim, sweep, threads, 2);
                 let run = (
-                    per_pass(how),
+                    how,
                     sim.pipeline_plan
                         .plan
                         .as_ref()
@@ -2118,11 +2150,13 @@ mod tests {
                 let what = format!("{columns} × {rows} on {threads} threads");
                 assert!(bits == passes, "{what}: not the bits of pass by pass");
                 if threads == 1 {
-                    assert_eq!(how, (most, None, None), "{what}");
+                    let one_part = LastStep::Wavefronts(most, PassesGo::InParts(1));
+                    assert_eq!(how, (one_part, None, None), "{what}");
                 } else if team_claims_its_passes(particles, threads) {
-                    assert!(how.0 > 1 && how.1.is_none(), "{what}: {how:?}");
+                    assert!(per_pass(how.0) > 1 && how.1.is_none(), "{what}: {how:?}");
                 } else {
-                    assert_eq!(how, (0, Some(threads), Some(20)), "{what}");
+                    let pipeline = (LastStep::Pipeline, Some(threads), Some(20));
+                    assert_eq!(how, pipeline, "{what}");
                 }
             }
             // Each grid's own case: 256 × 400 claims on two threads, 256 × 288 does not.
