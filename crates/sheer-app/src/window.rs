@@ -791,6 +791,12 @@ impl SheerApp {
 }
 
 impl eframe::App for SheerApp {
+    /// The window is cleared to the panel's colour, so that the panel needs no fill of its own: on a
+    /// software rasteriser a panel-sized quad costs milliseconds a frame.
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        visuals.panel_fill.to_normalized_gamma_f32()
+    }
+
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         // A finished screenshot: report it, and in scripted mode leave.
@@ -807,8 +813,12 @@ impl eframe::App for SheerApp {
         }
         self.advance_and_render(&ctx);
         self.frames_run += 1;
+        // No fill: the window's clear colour is the panel's (`clear_color`).
+        let panel =
+            egui::Frame::side_top_panel(&ctx.global_style()).fill(egui::Color32::TRANSPARENT);
         egui::Panel::left("controls")
             .resizable(false)
+            .frame(panel)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
             });
@@ -825,10 +835,14 @@ impl eframe::App for SheerApp {
                         too_small_message(available),
                     );
                 } else if let Some(texture) = self.renderer.texture_id() {
+                    // Pixel for pixel, smaller only where the window is: an enlarged image is only
+                    // blurred, and costs a larger quad on a software rasteriser.
                     let (width, height) = self.renderer.size();
-                    let size = egui::vec2(width as f32, height as f32);
-                    let scale = (available.x / size.x).min(available.y / size.y);
-                    let response = ui.add(
+                    let size = egui::vec2(width as f32, height as f32) / ctx.pixels_per_point();
+                    let scale = (available.x / size.x).min(available.y / size.y).min(1.0);
+                    let shown = egui::Rect::from_center_size(ui.max_rect().center(), size * scale);
+                    let response = ui.put(
+                        shown,
                         egui::Image::new((texture, size))
                             .fit_to_exact_size(size * scale)
                             .sense(egui::Sense::drag()),
