@@ -210,7 +210,8 @@ pub struct Simulation {
     pub(crate) split_positions: Xyz,
     pub(crate) split_velocities: Xyz,
     pub(crate) previous_positions: Xyz,
-    /// The start positions of a sub-step on the joined state (a general mesh, `solver.rs`).
+    /// The start positions of a sub-step on the joined state (a general mesh, `solver.rs`), made by
+    /// the first plain sub-step: a grid's fast paths never need them.
     pub(crate) joined_previous: Vec<DVec3>,
     /// The position-based methods' wind shares on a grid ([`SplitShares`]).
     pub(crate) split_shares: SplitShares,
@@ -382,6 +383,14 @@ impl Simulation {
             .filter(|shape| model.triangles == shape.triangles());
         // The wind's shares of a grid's cells, split ([`SplitShares`]).
         let cells = grid_triangulation.map_or(0, |g| (g.columns - 1) * (g.rows - 1));
+        // Only a grid's state is ever split (`steps_split`); a general mesh never needs the arrays.
+        let split = |n: usize| {
+            if model.grid.is_some() {
+                Xyz::zeros(n)
+            } else {
+                Xyz::default()
+            }
+        };
         Ok(Simulation {
             wind: WindField::new(&params.wind)?,
             family: family_coefficients(&params),
@@ -416,10 +425,10 @@ impl Simulation {
             forces: vec![DVec3::ZERO; n],
             spring_forces: vec![DVec3::ZERO; spring_count],
             triangle_forces: vec![DVec3::ZERO; triangle_count],
-            split_positions: Xyz::zeros(n),
-            split_velocities: Xyz::zeros(n),
-            previous_positions: Xyz::zeros(n),
-            joined_previous: vec![DVec3::ZERO; n],
+            split_positions: split(n),
+            split_velocities: split(n),
+            previous_positions: split(n),
+            joined_previous: Vec::new(),
             split_shares: [Xyz::zeros(cells), Xyz::zeros(cells)],
             lambdas: vec![0.0; spring_count],
             backup_positions: vec![DVec3::ZERO; n],

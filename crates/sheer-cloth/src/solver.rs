@@ -34,6 +34,8 @@ impl Simulation {
         let family = self.solver_constants(h, iterations, pbd_stiffness);
         self.sum_external_forces(t);
         // 2. Predict (Algorithm 1, lines 3–4); `joined_previous` keeps the start positions x⁰.
+        self.joined_previous
+            .resize(self.positions.len(), DVec3::ZERO);
         for i in 0..self.positions.len() {
             let start = self.positions[i];
             self.joined_previous[i] = start;
