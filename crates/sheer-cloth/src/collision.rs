@@ -11,12 +11,13 @@
 //! two triangles can approach. Pairs closer than the thickness at rest (neighbours in the fabric) never
 //! touch.
 //!
-//! **Broad phase**: spatial hashes (Teschner, Heidelberger, Müller, Pomeranets & Gross 2003) of the
-//! particles, queried with each triangle's box, and of the edges' midpoints, listing the pairs within
-//! `thickness + skin`. The lists are rebuilt only once some particle has moved more than `skin / 2`
-//! since they were built: a pair not listed was then at least `thickness + skin` apart, and the
-//! distance between a point and a triangle, or between two segments, changes by at most twice the
-//! largest displacement of their four particles, so it is still at least `thickness` apart.
+//! **Broad phase**: uniform grids of cells over the cloth's box (Ericson 2005, *Real-Time Collision
+//! Detection*, §7.1), one of the particles, queried with each triangle's box, and one of the edges'
+//! midpoints, whose neighbouring cells are paired, listing the pairs within `thickness + skin`
+//! (tested against a search of every pair). The lists are rebuilt only once some particle has moved
+//! more than `skin / 2` since they were built: a pair not listed was then at least `thickness + skin`
+//! apart, and the distance between a point and a triangle, or between two segments, changes by at most
+//! twice the largest displacement of their four particles, so it is still at least `thickness` apart.
 //!
 //! **Colliders** (spheres, capsules, planes): every free particle keeps `thickness / 2` from the
 //! surface, with Coulomb friction on its motion along the surface (Macklin, Müller, Chentanez & Kim
@@ -36,7 +37,7 @@ use crate::params::{Collider, Collisions};
 /// a flat flag lists nothing (docs/perf/collisions.md compares 1, 2 and 3).
 const SKIN_PER_THICKNESS: f64 = 2.0;
 
-/// The spatial hash's cell side, as a multiple of the reach: larger cells mean fewer cells a
+/// The particle grid's cell side, as a multiple of the reach: larger cells mean fewer cells a
 /// triangle's box overlaps, more particles in each.
 const CELL_PER_REACH: f64 = 4.0;
 
@@ -54,12 +55,13 @@ pub(crate) struct Contacts {
     edge_edge: Vec<(u32, u32)>,
     /// The cloth's edges, each once, its particles in ascending order (built at the first listing).
     edges: Vec<[u32; 2]>,
-    /// The spatial hashes of the particles and of the edges' midpoints, rebuilt with the lists.
-    hash: SpatialHash,
-    edge_hash: SpatialHash,
-    /// Scratch: the edges' midpoints and half-lengths (m).
+    /// The particles and the edges' midpoints binned by cell, rebuilt with the lists.
+    grid: CellGrid,
+    edge_grid: CellGrid,
+    /// Scratch: the edges' midpoints (m), and each edge's particles, half-length and box in
+    /// `edge_grid`'s order.
     midpoints: Vec<DVec3>,
-    half_lengths: Vec<f64>,
+    binned_edges: Vec<BinnedEdge>,
     /// Positions at the start of the sub-step and now (m), joined from the solver's split state.
     pub(crate) start: Vec<DVec3>,
     pub(crate) now: Vec<DVec3>,
@@ -149,8 +151,8 @@ impl Contacts {
         parallel: bool,
     ) {
         let reach = thickness + skin;
-        self.hash.build(&self.now, CELL_PER_REACH * reach);
-        let (hash, now) = (&self.hash, &self.now[..]);
+        self.grid.build(&self.now, CELL_PER_REACH * reach);
+        let (grid, now) = (&self.grid, &self.now[..]);
         self.point_triangle = concat_in_order(parallel, triangles.len(), |t, pairs| {
             let triangle = &triangles[t];
             let corners = triangle.map(|i| now[i as usize]);
@@ -164,8 +166,7 @@ impl Contacts {
                 .fold(0.0, f64::max)
                 .sqrt()
                 + reach;
-            hash.for_each_in_box(low, high, |p| {
-                let x = now[p as usize];
+            grid.for_each_in_box(low, high, |p, x| {
                 if triangle.contains(&p) || x.distance_squared(centroid) > ball * ball {
                     return;
                 }
@@ -233,8 +234,8 @@ impl Collider {
 
 impl Contacts {
     /// Lists the pairs of edges within `reach` (m) now, sharing no particle and at least `thickness`
-    /// apart at rest. Edges are hashed by midpoint in cells of `reach` plus the longest edge: two
-    /// edges within `reach` have midpoints at most that far apart, one cell.
+    /// apart at rest. Edges are binned by midpoint in cells of `reach` plus the longest edge: two
+    /// edges within `reach` have midpoints at most that far apart, in the same or neighbouring cells.
     fn list_edge_pairs(
         &mut self,
         thickness: f64,
@@ -255,52 +256,74 @@ impl Contacts {
         let Contacts {
             edges,
             edge_edge,
-            edge_hash,
+            edge_grid,
             midpoints,
-            half_lengths,
+            binned_edges,
             now,
             ..
         } = self;
-        half_lengths.clear();
-        half_lengths.extend(
-            edges
-                .iter()
-                .map(|&[a, b]| now[a as usize].distance(now[b as usize]) / 2.0),
-        );
         midpoints.clear();
         midpoints.extend(
             edges
                 .iter()
                 .map(|&[a, b]| (now[a as usize] + now[b as usize]) / 2.0),
         );
-        let longest = 2.0 * half_lengths.iter().copied().fold(0.0, f64::max);
-        let cell = reach + longest;
-        edge_hash.build(midpoints, cell);
-        let (edges, edge_hash, midpoints, now) =
-            (&edges[..], &*edge_hash, &midpoints[..], &now[..]);
-        *edge_edge = concat_in_order(parallel, edges.len(), |e, pairs| {
-            let [a, b] = edges[e];
-            let middle = midpoints[e];
-            // Each pair once: the later edges of this edge's cell, all edges of the 13 cells after it.
-            edge_hash.for_each_in_own_and_forward_cells(e as u32, |f| {
-                let [c, d] = edges[f as usize];
-                if c == a || c == b || d == a || d == b {
-                    return;
-                }
-                let within = reach + half_lengths[e] + half_lengths[f as usize];
-                if middle.distance_squared(midpoints[f as usize]) > within * within {
-                    return;
-                }
-                let [x, y, z, w] = [a, b, c, d].map(|i| now[i as usize]);
-                // Boxes farther apart than the reach along some axis: a cheap first test.
-                let apart = (x.min(y) - z.max(w)).max(z.min(w) - x.max(y));
-                if apart.max_element() >= reach || closest_points_of_segments(x, y, z, w).2 >= reach
-                {
-                    return;
-                }
-                let [x, y, z, w] = [a, b, c, d].map(|i| rest[i as usize]);
-                if closest_points_of_segments(x, y, z, w).2 >= thickness {
-                    pairs.push(((e as u32).min(f), (e as u32).max(f)));
+        let longest = edges
+            .iter()
+            .map(|&[a, b]| now[a as usize].distance(now[b as usize]))
+            .fold(0.0, f64::max);
+        edge_grid.build(midpoints, reach + longest);
+        binned_edges.clear();
+        binned_edges.extend(edge_grid.entries.iter().map(|&e| {
+            let [a, b] = edges[e as usize];
+            let (x, y) = (now[a as usize], now[b as usize]);
+            BinnedEdge {
+                edge: e,
+                particles: [a, b],
+                midpoint: midpoints[e as usize],
+                half_length: x.distance(y) / 2.0,
+                low: x.min(y),
+                high: x.max(y),
+            }
+        }));
+        let (grid, binned, now) = (&*edge_grid, &binned_edges[..], &now[..]);
+        let [_, rows, columns] = grid.dims;
+        *edge_edge = concat_in_order(parallel, grid.starts.len() - 1, |c, pairs| {
+            let own = grid.run(c as u32);
+            if own.is_empty() {
+                return;
+            }
+            let coordinates = [c / (rows * columns), (c / columns) % rows, c % columns];
+            grid.for_each_forward_neighbour(coordinates, |d| {
+                let other = grid.run(d);
+                for slot in own.clone() {
+                    let this = &binned[slot];
+                    let [a, b] = this.particles;
+                    // Each pair once: in its own cell, only the edges after this one.
+                    let first = if d == c as u32 { slot + 1 } else { other.start };
+                    for that in &binned[first..other.end] {
+                        let within = reach + this.half_length + that.half_length;
+                        if this.midpoint.distance_squared(that.midpoint) > within * within {
+                            continue;
+                        }
+                        let [c, d] = that.particles;
+                        if c == a || c == b || d == a || d == b {
+                            continue;
+                        }
+                        // Boxes farther apart than the reach along some axis: a cheap first test.
+                        let apart = (this.low - that.high).max(that.low - this.high);
+                        if apart.max_element() >= reach {
+                            continue;
+                        }
+                        let [x, y, z, w] = [a, b, c, d].map(|i| now[i as usize]);
+                        if closest_points_of_segments(x, y, z, w).2 >= reach {
+                            continue;
+                        }
+                        let [x, y, z, w] = [a, b, c, d].map(|i| rest[i as usize]);
+                        if closest_points_of_segments(x, y, z, w).2 >= thickness {
+                            pairs.push((this.edge.min(that.edge), this.edge.max(that.edge)));
+                        }
+                    }
                 }
             });
         });
@@ -538,97 +561,161 @@ pub(crate) fn closest_point_on_triangle(x: DVec3, [a, b, c]: [DVec3; 3]) -> (DVe
     (a + v * ab + w * ac, [1.0 - v - w, v, w])
 }
 
-/// Particles binned by cubic cell, the cells hashed into a table twice the particle count (Teschner
-/// et al. 2003), sorted by bucket so that each bucket's particles are one run, in index order.
-#[derive(Clone, Debug, Default)]
-struct SpatialHash {
-    cell: f64,
-    /// `starts[k]..starts[k + 1]` are the entries of bucket `k` in `particles`.
-    starts: Vec<u32>,
-    particles: Vec<u32>,
-    cells: Vec<[i64; 3]>,
+/// An edge as the edge listing reads it, stored in the order of its midpoint's cell.
+#[derive(Clone, Copy, Debug)]
+struct BinnedEdge {
+    /// Its index in the cloth's edges, and its particles.
+    edge: u32,
+    particles: [u32; 2],
+    /// Its midpoint, half its length and its box (m).
+    midpoint: DVec3,
+    half_length: f64,
+    low: DVec3,
+    high: DVec3,
 }
 
-impl SpatialHash {
-    fn build(&mut self, positions: &[DVec3], cell: f64) {
-        self.cell = cell;
-        let buckets = (2 * positions.len()).next_power_of_two().max(2);
-        self.cells.clear();
-        self.cells
-            .extend(positions.iter().map(|&x| cell_of(x, cell)));
-        self.starts.clear();
-        self.starts.resize(buckets + 1, 0);
-        for c in &self.cells {
-            self.starts[bucket(*c, buckets) + 1] += 1;
-        }
-        for k in 0..buckets {
-            self.starts[k + 1] += self.starts[k];
-        }
-        let mut next = self.starts.clone();
-        self.particles.clear();
-        self.particles.resize(positions.len(), 0);
-        for (i, c) in self.cells.iter().enumerate() {
-            let k = bucket(*c, buckets);
-            self.particles[next[k] as usize] = i as u32;
-            next[k] += 1;
-        }
-    }
+/// Points binned by cubic cell over their bounding box (a uniform grid, Ericson 2005, *Real-Time
+/// Collision Detection*, §7.1), sorted by cell so that each cell's points are one run, in index order,
+/// with a copy of the points in that order for the queries to read in sequence.
+#[derive(Clone, Debug, Default)]
+struct CellGrid {
+    /// The cell side (m), and the lowest cell's corner in cells (whole numbers, on the lattice
+    /// `floor(x / cell)`).
+    cell: f64,
+    origin: DVec3,
+    /// Cells along x, y and z; cell `(i, j, k)` is number `(i · dims[1] + j) · dims[2] + k`.
+    dims: [usize; 3],
+    /// `starts[c]..starts[c + 1]` are the entries of cell `c` in `entries` and `points`.
+    starts: Vec<u32>,
+    /// The points' indices and positions (m), sorted by cell.
+    entries: Vec<u32>,
+    points: Vec<DVec3>,
+    /// Scratch: each point's cell.
+    cells: Vec<u32>,
+}
 
-    /// Calls `visit` for every entry after `entry` in `entry`'s own cell and for every entry in the 13
-    /// neighbouring cells that come after that cell (in lexicographic order of the offset): over all
-    /// entries, every pair in the same or neighbouring cells is visited once.
-    fn for_each_in_own_and_forward_cells(&self, entry: u32, mut visit: impl FnMut(u32)) {
-        let own = self.cells[entry as usize];
-        for di in -1..=1i64 {
-            for dj in -1..=1i64 {
-                for dk in -1..=1i64 {
-                    if (di, dj, dk) < (0, 0, 0) {
-                        continue;
-                    }
-                    let same = (di, dj, dk) == (0, 0, 0);
-                    self.for_each_in_cell([own[0] + di, own[1] + dj, own[2] + dk], |q| {
-                        if !same || q > entry {
-                            visit(q);
-                        }
-                    });
-                }
+impl CellGrid {
+    /// Bins `points` in cells of side `cell` (m), or larger ones where that many would cover the
+    /// points' box with more than four cells a point (a cloth flung wide), so that memory stays linear
+    /// in the points: any side finds every point of a box, larger ones more points beside it.
+    fn build(&mut self, points: &[DVec3], cell: f64) {
+        let finite = points.iter().filter(|x| x.is_finite());
+        let low = finite.clone().fold(DVec3::INFINITY, |a, &x| a.min(x));
+        let high = finite.fold(DVec3::NEG_INFINITY, |a, &x| a.max(x));
+        let (low, high) = if low.cmple(high).all() {
+            (low, high)
+        } else {
+            (DVec3::ZERO, DVec3::ZERO)
+        };
+        let most = 4.0 * points.len() as f64 + 64.0;
+        let mut side = cell;
+        let (origin, dims) = loop {
+            let origin = (low / side).floor();
+            let dims = (high / side).floor() - origin + DVec3::ONE;
+            let count = dims.x * dims.y * dims.z;
+            if count <= most {
+                break (origin, dims.to_array().map(|d| d as usize));
             }
+            side *= (count / most).cbrt().max(1.5);
+        };
+        self.cell = side;
+        self.origin = origin;
+        self.dims = dims;
+        let count = dims[0] * dims[1] * dims[2];
+        let mut cells = std::mem::take(&mut self.cells);
+        cells.clear();
+        cells.extend(
+            points
+                .iter()
+                .map(|&x| self.cell_number(self.cell_coordinates(x))),
+        );
+        self.cells = cells;
+        self.starts.clear();
+        self.starts.resize(count + 1, 0);
+        for &c in &self.cells {
+            self.starts[c as usize + 1] += 1;
+        }
+        for c in 0..count {
+            self.starts[c + 1] += self.starts[c];
+        }
+        self.entries.clear();
+        self.entries.resize(points.len(), 0);
+        self.points.clear();
+        self.points.resize(points.len(), DVec3::ZERO);
+        // Placed in index order: each cell's run is in index order.
+        let mut next = self.starts.clone();
+        for (i, &c) in self.cells.iter().enumerate() {
+            let slot = next[c as usize] as usize;
+            self.entries[slot] = i as u32;
+            self.points[slot] = points[i];
+            next[c as usize] += 1;
         }
     }
 
-    /// Calls `visit` once for every particle whose cell overlaps the box `low..high` (m).
-    fn for_each_in_box(&self, low: DVec3, high: DVec3, mut visit: impl FnMut(u32)) {
-        let (from, to) = (cell_of(low, self.cell), cell_of(high, self.cell));
+    /// The cell holding `x` (m), clamped to the grid (a point outside it, or not finite, is in the
+    /// nearest cell: queries only ever ask for cells of the grid).
+    fn cell_coordinates(&self, x: DVec3) -> [usize; 3] {
+        let c = ((x / self.cell).floor() - self.origin).max(DVec3::ZERO);
+        let top = DVec3::from_array(self.dims.map(|d| (d - 1) as f64));
+        c.min(top).to_array().map(|c| c as usize)
+    }
+
+    fn cell_number(&self, [i, j, k]: [usize; 3]) -> u32 {
+        ((i * self.dims[1] + j) * self.dims[2] + k) as u32
+    }
+
+    /// The entries of cell number `c`, as indices into `entries` and `points`.
+    fn run(&self, c: u32) -> std::ops::Range<usize> {
+        self.starts[c as usize] as usize..self.starts[c as usize + 1] as usize
+    }
+
+    /// Calls `visit(index, position)` for every point whose cell overlaps the box `low..high` (m), the
+    /// cells in lexicographic order, each cell's points in index order.
+    fn for_each_in_box(&self, low: DVec3, high: DVec3, mut visit: impl FnMut(u32, DVec3)) {
+        // Cells of the box outside the grid hold no point.
+        let from = ((low / self.cell).floor() - self.origin).max(DVec3::ZERO);
+        let to = ((high / self.cell).floor() - self.origin)
+            .min(DVec3::from_array(self.dims.map(|d| (d - 1) as f64)));
+        if !from.cmple(to).all() {
+            return;
+        }
+        let (from, to) = (
+            from.to_array().map(|c| c as usize),
+            to.to_array().map(|c| c as usize),
+        );
         for i in from[0]..=to[0] {
             for j in from[1]..=to[1] {
-                for k in from[2]..=to[2] {
-                    self.for_each_in_cell([i, j, k], &mut visit);
+                let row = self.cell_number([i, j, from[2]])..=self.cell_number([i, j, to[2]]);
+                let (first, last) = (self.run(*row.start()).start, self.run(*row.end()).end);
+                for slot in first..last {
+                    visit(self.entries[slot], self.points[slot]);
                 }
             }
         }
     }
 
-    /// Calls `visit` for every particle in `cell`, in index order.
-    fn for_each_in_cell(&self, cell: [i64; 3], mut visit: impl FnMut(u32)) {
-        let b = bucket(cell, self.starts.len() - 1);
-        for &p in &self.particles[self.starts[b] as usize..self.starts[b + 1] as usize] {
-            // Another cell can share the bucket: visit each particle from its own cell only.
-            if self.cells[p as usize] == cell {
-                visit(p);
+    /// Calls `visit(d)` for cell `c` itself and each of its 13 neighbours that come after it (in
+    /// lexicographic order of the offset) inside the grid: over all cells `c`, every pair of
+    /// neighbouring cells is visited once.
+    fn for_each_forward_neighbour(&self, c: [usize; 3], mut visit: impl FnMut(u32)) {
+        for di in 0..=1usize {
+            for dj in -1..=1isize {
+                for dk in -1..=1isize {
+                    if (di, dj, dk) <= (0, 0, -1) {
+                        continue;
+                    }
+                    let (i, j, k) = (
+                        c[0] + di,
+                        c[1].wrapping_add_signed(dj),
+                        c[2].wrapping_add_signed(dk),
+                    );
+                    if i < self.dims[0] && j < self.dims[1] && k < self.dims[2] {
+                        visit(self.cell_number([i, j, k]));
+                    }
+                }
             }
         }
     }
-}
-
-fn cell_of(x: DVec3, cell: f64) -> [i64; 3] {
-    (x / cell).floor().to_array().map(|c| c as i64)
-}
-
-/// Teschner et al. 2003's hash of a cell (three large primes, XOR), reduced to `buckets` (a power of two).
-fn bucket([i, j, k]: [i64; 3], buckets: usize) -> usize {
-    let h =
-        (i.wrapping_mul(73_856_093)) ^ (j.wrapping_mul(19_349_663)) ^ (k.wrapping_mul(83_492_791));
-    (h as u64 as usize) & (buckets - 1)
 }
 
 #[cfg(test)]
@@ -805,27 +892,155 @@ mod tests {
         assert_eq!(x, DVec3::new(1.0, 0.0, 0.0));
     }
 
+    /// The broad phase lists exactly the pairs a search of every pair finds, on a sheet folded onto
+    /// itself with its layers within reach and a crumpled band (one thread and rayon's threads alike).
     #[test]
-    fn the_hash_finds_every_particle_in_a_box() {
-        let positions: Vec<DVec3> = (0..500)
+    fn the_lists_hold_every_close_pair_a_search_of_all_pairs_finds() {
+        let (columns, rows, spacing) = (24usize, 14usize, 0.01);
+        let index = |i: usize, j: usize| (j * columns + i) as u32;
+        let rest: Vec<DVec3> = (0..rows)
+            .flat_map(|j| (0..columns).map(move |i| DVec3::new(i as f64, j as f64, 0.0) * spacing))
+            .collect();
+        let mut triangles = Vec::new();
+        for j in 0..rows - 1 {
+            for i in 0..columns - 1 {
+                let [a, b, c, d] = [
+                    index(i, j),
+                    index(i + 1, j),
+                    index(i, j + 1),
+                    index(i + 1, j + 1),
+                ];
+                triangles.extend([[a, b, d], [a, d, c]]);
+            }
+        }
+        // Folded at x = 12 cm, the upper layer 3 to 9 mm above the lower, with a ripple; the rows
+        // past 10 pushed together to 60 % of their spacing.
+        let now: Vec<DVec3> = rest
+            .iter()
+            .enumerate()
+            .map(|(k, x)| {
+                let wobble = 0.003 * ((k as f64) * 0.7).sin();
+                let y = if x.y > 0.1 {
+                    0.1 + 0.6 * (x.y - 0.1)
+                } else {
+                    x.y
+                };
+                if x.x > 0.12 {
+                    DVec3::new(0.24 - x.x, y, 0.006 + wobble)
+                } else {
+                    DVec3::new(x.x, y, 0.3 * wobble)
+                }
+            })
+            .collect();
+        let (thickness, skin) = (0.004, 0.008);
+        let reach = thickness + skin;
+        let mut point_triangle = Vec::new();
+        for (t, triangle) in triangles.iter().enumerate() {
+            for p in 0..now.len() as u32 {
+                let corners = triangle.map(|i| now[i as usize]);
+                let rest_corners = triangle.map(|i| rest[i as usize]);
+                let x = now[p as usize];
+                let at_rest = rest[p as usize];
+                if !triangle.contains(&p)
+                    && (x - closest_point_on_triangle(x, corners).0).length() < reach
+                    && (at_rest - closest_point_on_triangle(at_rest, rest_corners).0).length()
+                        >= thickness
+                {
+                    point_triangle.push((p, t as u32));
+                }
+            }
+        }
+        let mut contacts = Contacts {
+            now: now.clone(),
+            ..Contacts::default()
+        };
+        contacts.list_pairs(thickness, skin, &rest, &triangles, false);
+        let mut edge_edge = Vec::new();
+        for (e, &[a, b]) in contacts.edges.iter().enumerate() {
+            for (f, &[c, d]) in contacts.edges.iter().enumerate().skip(e + 1) {
+                let at = |x: &[DVec3]| {
+                    closest_points_of_segments(
+                        x[a as usize],
+                        x[b as usize],
+                        x[c as usize],
+                        x[d as usize],
+                    )
+                    .2
+                };
+                if ![c, d].contains(&a)
+                    && ![c, d].contains(&b)
+                    && at(&now) < reach
+                    && at(&rest) >= thickness
+                {
+                    edge_edge.push((e as u32, f as u32));
+                }
+            }
+        }
+        assert!(
+            point_triangle.len() > 500 && edge_edge.len() > 500,
+            "the fold lists pairs"
+        );
+        for parallel in [false, true] {
+            let mut contacts = Contacts {
+                now: now.clone(),
+                ..Contacts::default()
+            };
+            contacts.list_pairs(thickness, skin, &rest, &triangles, parallel);
+            let mut listed = contacts.point_triangle.clone();
+            // Listed triangle by triangle; sorted here by triangle to compare with the search.
+            listed.sort_unstable_by_key(|&(p, t)| (t, p));
+            assert_eq!(listed, point_triangle, "parallel {parallel}");
+            assert_eq!(contacts.edge_edge, edge_edge, "parallel {parallel}");
+        }
+    }
+
+    #[test]
+    fn the_grid_finds_every_point_in_a_box_once_in_cell_order() {
+        let mut positions: Vec<DVec3> = (0..500)
             .map(|i| {
                 let f = i as f64;
                 DVec3::new((f * 0.37).sin(), (f * 0.71).cos(), (f * 0.13).sin() * 0.5)
             })
             .collect();
-        let mut hash = SpatialHash::default();
-        hash.build(&positions, 0.1);
-        let (low, high) = (DVec3::new(-0.3, -0.2, -0.1), DVec3::new(0.4, 0.5, 0.2));
-        let mut found = Vec::new();
-        hash.for_each_in_box(low, high, |p| found.push(p));
-        found.sort_unstable();
-        let inside: Vec<u32> = (0..500u32)
-            .filter(|&i| {
-                let x = positions[i as usize];
-                x.cmpge(low).all() && x.cmple(high).all()
-            })
-            .collect();
-        assert!(inside.iter().all(|i| found.binary_search(i).is_ok()));
-        assert!(found.windows(2).all(|w| w[0] < w[1]), "each particle once");
+        positions[7] = DVec3::new(f64::NAN, 0.0, 0.0); // binned somewhere, found nowhere it is not
+        let mut grid = CellGrid::default();
+        for cell in [0.1, 1e-6] {
+            // 1 µm cells would be 10¹⁸ of them: the grid takes larger ones and answers the same.
+            grid.build(&positions, cell);
+            assert!(
+                grid.starts.len() <= 4 * 500 + 65,
+                "{cell}: {}",
+                grid.starts.len()
+            );
+            for (low, high) in [
+                (DVec3::new(-0.3, -0.2, -0.1), DVec3::new(0.4, 0.5, 0.2)),
+                (DVec3::splat(-5.0), DVec3::splat(5.0)),
+                (DVec3::splat(3.0), DVec3::splat(5.0)),
+            ] {
+                let mut found = Vec::new();
+                grid.for_each_in_box(low, high, |p, x| {
+                    assert_eq!(
+                        x.to_array().map(f64::to_bits),
+                        positions[p as usize].to_array().map(f64::to_bits)
+                    );
+                    found.push(p)
+                });
+                let mut sorted = found.clone();
+                sorted.sort_unstable();
+                sorted.dedup();
+                assert_eq!(sorted.len(), found.len(), "each point once");
+                let inside = (0..500u32).filter(|&i| {
+                    let x = positions[i as usize];
+                    x.cmpge(low).all() && x.cmple(high).all()
+                });
+                assert!(inside.into_iter().all(|i| sorted.binary_search(&i).is_ok()));
+                // Cells in lexicographic order, each cell's points in index order.
+                let keys: Vec<([usize; 3], u32)> = found
+                    .iter()
+                    .map(|&p| (grid.cell_coordinates(positions[p as usize]), p))
+                    .collect();
+                assert!(keys.windows(2).all(|w| w[0] < w[1]));
+            }
+        }
     }
 }
