@@ -368,17 +368,10 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
         .map(|t| t.to_string())
         .collect();
     if !several.is_empty() {
-        // Contact pairs are listed on every thread of the pool whatever the cloth's size.
-        let listing = if args.contacts == ContactCase::SelfAndPole {
-            "; its contact pairs were listed on every thread"
-        } else {
-            ""
-        };
         for &(columns, rows) in grids.iter().filter(|(c, r)| c * r < threshold) {
             eprintln!(
                 "note: {columns}x{rows} ({} particles) ran on one thread at --threads {}: below \
-                 parallel_min_particles, {threshold} (--parallel-min-particles 0 runs it on the \
-                 team){listing}",
+                 parallel_min_particles, {threshold} (--parallel-min-particles 0 runs it on the team)",
                 columns * rows,
                 several.join(",")
             );

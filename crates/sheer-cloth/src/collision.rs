@@ -37,8 +37,8 @@ use crate::params::{Collider, Collisions};
 /// a flat flag lists nothing (docs/perf/collisions.md compares 1, 2 and 3).
 const SKIN_PER_THICKNESS: f64 = 2.0;
 
-/// The particle grid's cell side, as a multiple of the reach: larger cells mean fewer cells a
-/// triangle's box overlaps, more particles in each.
+/// The particle grid's cell side (the smallest it takes), as a multiple of the reach: larger cells
+/// mean fewer cells a triangle's box overlaps, more particles in each.
 const CELL_PER_REACH: f64 = 4.0;
 
 /// The candidate contact pairs of a cloth and the scratch the projection works in.
@@ -288,7 +288,7 @@ impl Contacts {
         }));
         let (grid, binned, now) = (&*edge_grid, &binned_edges[..], &now[..]);
         let [_, rows, columns] = grid.dims;
-        *edge_edge = concat_in_order(parallel, grid.starts.len() - 1, |c, pairs| {
+        *edge_edge = concat_in_order(parallel, grid.cells(), |c, pairs| {
             let own = grid.run(c as u32);
             if own.is_empty() {
                 return;
@@ -585,7 +585,8 @@ struct CellGrid {
     origin: DVec3,
     /// Cells along x, y and z; cell `(i, j, k)` is number `(i · dims[1] + j) · dims[2] + k`.
     dims: [usize; 3],
-    /// `starts[c]..starts[c + 1]` are the entries of cell `c` in `entries` and `points`.
+    /// `starts[c]..starts[c + 1]` are the entries of cell `c` in `entries` and `points`; one cell past
+    /// the grid's holds the points that are not finite, which no query visits.
     starts: Vec<u32>,
     /// The points' indices and positions (m), sorted by cell.
     entries: Vec<u32>,
@@ -595,20 +596,29 @@ struct CellGrid {
 }
 
 impl CellGrid {
-    /// Bins `points` in cells of side `cell` (m), or larger ones where that many would cover the
-    /// points' box with more than four cells a point (a cloth flung wide), so that memory stays linear
-    /// in the points: any side finds every point of a box, larger ones more points beside it.
+    /// Bins `points` in cells of side `cell` (m) over their box, in at most `4 n + 64` cells so that
+    /// memory stays linear in the points: where more would be needed, over the box of the middle 98 %
+    /// of the points on each axis, the points beyond it in its outermost cells (a few particles flung
+    /// far), and where that is still too many, in larger cells (a cloth spread wide). Every box query
+    /// finds every point of the box whatever the grid; a larger one visits more points beside it.
     fn build(&mut self, points: &[DVec3], cell: f64) {
         let finite = points.iter().filter(|x| x.is_finite());
         let low = finite.clone().fold(DVec3::INFINITY, |a, &x| a.min(x));
         let high = finite.fold(DVec3::NEG_INFINITY, |a, &x| a.max(x));
-        let (low, high) = if low.cmple(high).all() {
+        let (mut low, mut high) = if low.cmple(high).all() {
             (low, high)
         } else {
             (DVec3::ZERO, DVec3::ZERO)
         };
         let most = 4.0 * points.len() as f64 + 64.0;
-        let mut side = cell;
+        let mut side = if cell > 0.0 { cell } else { f64::INFINITY };
+        let cells_over = |low: DVec3, high: DVec3, side: f64| {
+            let dims = (high / side).floor() - (low / side).floor() + DVec3::ONE;
+            dims.x * dims.y * dims.z
+        };
+        if cells_over(low, high, side) > most {
+            (low, high) = middle_box(points, 0.01);
+        }
         let (origin, dims) = loop {
             let origin = (low / side).floor();
             let dims = (high / side).floor() - origin + DVec3::ONE;
@@ -621,21 +631,23 @@ impl CellGrid {
         self.cell = side;
         self.origin = origin;
         self.dims = dims;
-        let count = dims[0] * dims[1] * dims[2];
+        let count = self.cells();
         let mut cells = std::mem::take(&mut self.cells);
         cells.clear();
-        cells.extend(
-            points
-                .iter()
-                .map(|&x| self.cell_number(self.cell_coordinates(x))),
-        );
+        cells.extend(points.iter().map(|&x| {
+            if x.is_finite() {
+                self.cell_number(self.cell_coordinates(x))
+            } else {
+                count as u32
+            }
+        }));
         self.cells = cells;
         self.starts.clear();
-        self.starts.resize(count + 1, 0);
+        self.starts.resize(count + 2, 0);
         for &c in &self.cells {
             self.starts[c as usize + 1] += 1;
         }
-        for c in 0..count {
+        for c in 0..=count {
             self.starts[c + 1] += self.starts[c];
         }
         self.entries.clear();
@@ -652,8 +664,13 @@ impl CellGrid {
         }
     }
 
-    /// The cell holding `x` (m), clamped to the grid (a point outside it, or not finite, is in the
-    /// nearest cell: queries only ever ask for cells of the grid).
+    /// The number of cells of the grid.
+    fn cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// The cell holding `x` (m), clamped to the grid (a box reaching beyond it starts or ends in its
+    /// outermost cells).
     fn cell_coordinates(&self, x: DVec3) -> [usize; 3] {
         let c = ((x / self.cell).floor() - self.origin).max(DVec3::ZERO);
         let top = DVec3::from_array(self.dims.map(|d| (d - 1) as f64));
@@ -670,19 +687,15 @@ impl CellGrid {
     }
 
     /// Calls `visit(index, position)` for every point whose cell overlaps the box `low..high` (m), the
-    /// cells in lexicographic order, each cell's points in index order.
+    /// cells in lexicographic order, each cell's points in index order; none for a box that is not
+    /// finite (a cloth diverging, which its step reports) or empty.
     fn for_each_in_box(&self, low: DVec3, high: DVec3, mut visit: impl FnMut(u32, DVec3)) {
-        // Cells of the box outside the grid hold no point.
-        let from = ((low / self.cell).floor() - self.origin).max(DVec3::ZERO);
-        let to = ((high / self.cell).floor() - self.origin)
-            .min(DVec3::from_array(self.dims.map(|d| (d - 1) as f64)));
-        if !from.cmple(to).all() {
+        if !(low.is_finite() && high.is_finite() && low.cmple(high).all()) {
             return;
         }
-        let (from, to) = (
-            from.to_array().map(|c| c as usize),
-            to.to_array().map(|c| c as usize),
-        );
+        // Clamped like the points: a box beyond the grid reaches the outermost cells, where the
+        // points beyond it are.
+        let (from, to) = (self.cell_coordinates(low), self.cell_coordinates(high));
         for i in from[0]..=to[0] {
             for j in from[1]..=to[1] {
                 let row = self.cell_number([i, j, from[2]])..=self.cell_number([i, j, to[2]]);
@@ -716,6 +729,29 @@ impl CellGrid {
             }
         }
     }
+}
+
+/// The box (m) of the points' coordinates between the `tail` and `1 − tail` quantiles on each axis,
+/// of the finite points (the origin when there are none).
+fn middle_box(points: &[DVec3], tail: f64) -> (DVec3, DVec3) {
+    let mut low = DVec3::ZERO;
+    let mut high = DVec3::ZERO;
+    let mut coordinates: Vec<f64> = Vec::new();
+    for axis in 0..3 {
+        coordinates.clear();
+        coordinates.extend(points.iter().filter(|x| x.is_finite()).map(|x| x[axis]));
+        if coordinates.is_empty() {
+            break;
+        }
+        let last = coordinates.len() - 1;
+        let (from, to) = (
+            (tail * last as f64) as usize,
+            last - (tail * last as f64) as usize,
+        );
+        low[axis] = *coordinates.select_nth_unstable_by(from, f64::total_cmp).1;
+        high[axis] = *coordinates.select_nth_unstable_by(to, f64::total_cmp).1;
+    }
+    (low, high)
 }
 
 #[cfg(test)]
@@ -893,7 +929,7 @@ mod tests {
     }
 
     /// The broad phase lists exactly the pairs a search of every pair finds, on a sheet folded onto
-    /// itself with its layers within reach and a crumpled band (one thread and rayon's threads alike).
+    /// itself with its layers within reach and a band pushed together, with `parallel` off and on.
     #[test]
     fn the_lists_hold_every_close_pair_a_search_of_all_pairs_finds() {
         let (columns, rows, spacing) = (24usize, 14usize, 0.01);
@@ -1002,20 +1038,29 @@ mod tests {
                 DVec3::new((f * 0.37).sin(), (f * 0.71).cos(), (f * 0.13).sin() * 0.5)
             })
             .collect();
-        positions[7] = DVec3::new(f64::NAN, 0.0, 0.0); // binned somewhere, found nowhere it is not
+        positions[7] = DVec3::new(f64::NAN, 0.0, 0.0); // binned apart, never found
+        let mut far = positions.clone();
+        far[3] = DVec3::new(100.0, -50.0, 80.0); // flung far: binned in the outermost cell
         let mut grid = CellGrid::default();
-        for cell in [0.1, 1e-6] {
-            // 1 µm cells would be 10¹⁸ of them: the grid takes larger ones and answers the same.
-            grid.build(&positions, cell);
-            assert!(
-                grid.starts.len() <= 4 * 500 + 65,
-                "{cell}: {}",
-                grid.starts.len()
-            );
+        // 1 µm cells would be 10¹⁸ of them: the grid takes larger ones and answers the same.
+        for (positions, cell) in [(&positions, 0.2), (&positions, 1e-6), (&far, 0.2)] {
+            grid.build(positions, cell);
+            assert!(grid.cells() <= 4 * 500 + 64, "{cell}: {}", grid.cells());
+            // The far point does not thin the grid: it keeps its cells.
+            assert!(cell < 1e-3 || grid.cell == cell, "{}", grid.cell);
+            let mut nothing = true;
+            grid.for_each_in_box(DVec3::splat(f64::NEG_INFINITY), DVec3::ZERO, |_, _| {
+                nothing = false
+            });
+            assert!(nothing, "a box that is not finite holds no point");
             for (low, high) in [
                 (DVec3::new(-0.3, -0.2, -0.1), DVec3::new(0.4, 0.5, 0.2)),
                 (DVec3::splat(-5.0), DVec3::splat(5.0)),
                 (DVec3::splat(3.0), DVec3::splat(5.0)),
+                (
+                    DVec3::new(99.0, -51.0, 79.0),
+                    DVec3::new(101.0, -49.0, 81.0),
+                ),
             ] {
                 let mut found = Vec::new();
                 grid.for_each_in_box(low, high, |p, x| {
@@ -1029,6 +1074,10 @@ mod tests {
                 sorted.sort_unstable();
                 sorted.dedup();
                 assert_eq!(sorted.len(), found.len(), "each point once");
+                assert!(
+                    !found.contains(&7),
+                    "the point that is not finite is in no box"
+                );
                 let inside = (0..500u32).filter(|&i| {
                     let x = positions[i as usize];
                     x.cmpge(low).all() && x.cmple(high).all()

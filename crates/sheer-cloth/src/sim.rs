@@ -628,9 +628,8 @@ impl Simulation {
     /// joined one, and adds what they moved a particle over `h` to its velocity: as if projected before
     /// the velocity update.
     pub(crate) fn project_contacts(&mut self, h: f64, split: bool) {
-        // Contact pairs are listed on rayon's threads whenever there are several (the same list): one
-        // listing is thousands of queries, worth sharing even on a cloth too small for a team.
-        let parallel = rayon::current_num_threads() > 1;
+        // Large cloths list their contact pairs on rayon's threads (the same list).
+        let parallel = self.parallel();
         let Simulation {
             params,
             contacts,
