@@ -62,6 +62,11 @@ pub(crate) struct Contacts {
     /// `edge_grid`'s order.
     midpoints: Vec<DVec3>,
     binned_edges: Vec<BinnedEdge>,
+    /// The colliders' boxes and the free particles inside one (`list_near_colliders`).
+    collider_boxes: Vec<(DVec3, DVec3)>,
+    pub(crate) near_colliders: Vec<u32>,
+    /// Scratch of the sub-step: which particle the contacts moved, from where to where (m).
+    pub(crate) moves: Vec<(usize, DVec3, DVec3)>,
     /// Positions at the start of the sub-step and now (m), joined from the solver's split state.
     pub(crate) start: Vec<DVec3>,
     pub(crate) now: Vec<DVec3>,
@@ -116,15 +121,66 @@ impl Contacts {
             }
         }
         // Colliders last: nothing ends a sub-step inside one.
-        for collider in &collisions.colliders {
-            let gap = collisions.thickness / 2.0;
-            let (low, high) = collider.bounds(gap);
-            for (i, x) in self.now.iter_mut().enumerate() {
-                if inverse_masses[i] > 0.0 && x.cmpge(low).all() && x.cmple(high).all() {
-                    *x = kept_off_collider(collider, gap, collisions.friction, self.start[i], *x);
-                }
-            }
+        let now = std::mem::take(&mut self.now);
+        self.list_near_colliders(collisions, inverse_masses, |i| now[i]);
+        self.now = now;
+        for &i in &self.near_colliders {
+            let i = i as usize;
+            self.now[i] = self.kept_off_colliders(collisions, self.start[i], self.now[i]);
         }
+    }
+
+    /// Lists in `near_colliders` the free particles inside some collider's box (the box outside
+    /// which a particle is farther than half the thickness from it), in index order, reading
+    /// particle `i`'s position (m) as `position(i)`; `collider_boxes` keeps the boxes.
+    pub(crate) fn list_near_colliders(
+        &mut self,
+        collisions: &Collisions,
+        inverse_masses: &[f64],
+        position: impl Fn(usize) -> DVec3,
+    ) {
+        let gap = collisions.thickness / 2.0;
+        self.collider_boxes.clear();
+        self.collider_boxes
+            .extend(collisions.colliders.iter().map(|c| c.bounds(gap)));
+        self.near_colliders.clear();
+        if self.collider_boxes.is_empty() {
+            return;
+        }
+        let boxes = &self.collider_boxes;
+        self.near_colliders.extend(
+            (0..inverse_masses.len() as u32)
+                .filter(|&i| inverse_masses[i as usize] > 0.0)
+                .filter(|&i| {
+                    let x = position(i as usize);
+                    boxes
+                        .iter()
+                        .any(|(low, high)| x.cmpge(*low).all() && x.cmple(*high).all())
+                }),
+        );
+    }
+
+    /// Where a particle listed by [`list_near_colliders`](Self::list_near_colliders) that was at
+    /// `start` and is now at `x` (m) ends up when kept off every collider in turn whose box it is in
+    /// ([`kept_off_collider`], a gap of half the thickness): a particle's place depends on nothing
+    /// else, so particles are kept off one at a time, and one in no box stays where it is.
+    pub(crate) fn kept_off_colliders(
+        &self,
+        collisions: &Collisions,
+        start: DVec3,
+        x: DVec3,
+    ) -> DVec3 {
+        let gap = collisions.thickness / 2.0;
+        collisions.colliders.iter().zip(&self.collider_boxes).fold(
+            x,
+            |x, (collider, (low, high))| {
+                if x.cmpge(*low).all() && x.cmple(*high).all() {
+                    kept_off_collider(collider, gap, collisions.friction, start, x)
+                } else {
+                    x
+                }
+            },
+        )
     }
 
     /// Whether a particle has moved more than `skin / 2` since the pairs were listed (or they never

@@ -644,32 +644,61 @@ impl Simulation {
             joined_previous,
             ..
         } = self;
-        let n = rest_positions.len();
-        contacts.start.resize(n, DVec3::ZERO);
-        contacts.now.resize(n, DVec3::ZERO);
-        if split {
-            previous_positions.join_into(&mut contacts.start);
-            split_positions.join_into(&mut contacts.now);
-        } else {
-            contacts.start.copy_from_slice(joined_previous);
-            contacts.now.copy_from_slice(positions);
-        }
-        contacts.project(
-            &params.collisions,
-            rest_positions,
-            inverse_masses,
-            triangles,
-            parallel,
-        );
-        for (i, &after) in contacts.now.iter().enumerate() {
-            let before = if split {
-                split_positions.as_ref().at(i)
+        // What the contacts moved: particle, from, to (m).
+        let mut moves = std::mem::take(&mut contacts.moves);
+        moves.clear();
+        if params.collisions.self_collision {
+            let n = rest_positions.len();
+            contacts.start.resize(n, DVec3::ZERO);
+            contacts.now.resize(n, DVec3::ZERO);
+            if split {
+                previous_positions.join_into(&mut contacts.start);
+                split_positions.join_into(&mut contacts.now);
             } else {
-                positions[i]
-            };
-            if after == before {
-                continue;
+                contacts.start.copy_from_slice(joined_previous);
+                contacts.now.copy_from_slice(positions);
             }
+            contacts.project(
+                &params.collisions,
+                rest_positions,
+                inverse_masses,
+                triangles,
+                parallel,
+            );
+            for (i, &after) in contacts.now.iter().enumerate() {
+                let before = if split {
+                    split_positions.as_ref().at(i)
+                } else {
+                    positions[i]
+                };
+                if after != before {
+                    moves.push((i, before, after));
+                }
+            }
+        } else {
+            // Colliders alone move each particle by itself: only those in a collider's box are read
+            // whole and kept off where they lie, nothing joined.
+            if split {
+                let x = split_positions.as_ref();
+                contacts.list_near_colliders(&params.collisions, inverse_masses, |i| x.at(i));
+            } else {
+                contacts.list_near_colliders(&params.collisions, inverse_masses, |i| positions[i]);
+            }
+            for &i in &contacts.near_colliders {
+                let i = i as usize;
+                let (start, before) = if split {
+                    let (start, now) = (previous_positions.as_ref(), split_positions.as_ref());
+                    (start.at(i), now.at(i))
+                } else {
+                    (joined_previous[i], positions[i])
+                };
+                let after = contacts.kept_off_colliders(&params.collisions, start, before);
+                if after != before {
+                    moves.push((i, before, after));
+                }
+            }
+        }
+        for &(i, before, after) in &moves {
             let moved = (after - before) / h;
             if split {
                 split_positions.set(i, after);
@@ -680,6 +709,7 @@ impl Simulation {
                 velocities[i] += moved;
             }
         }
+        contacts.moves = moves;
     }
 
     /// Writes the position-based methods' split state into `positions` and `velocities`: at the end of

@@ -584,4 +584,32 @@ mod tests {
             assert_fast_gives_the_plain_bits(sim, threads, 20, "contacts");
         }
     }
+
+    /// Colliders alone (a sphere through the middle of the flag and the pole), which keep each
+    /// particle off where it lies instead of projecting on the joined state.
+    #[test]
+    fn colliders_alone_give_the_plain_bits() {
+        for (threads, parallel) in [(1, false), (2, true)] {
+            let sim = flag(32, 23, parallel, |p| {
+                let spec = GridSpec {
+                    columns: 32,
+                    rows: 23,
+                    ..GridSpec::default()
+                };
+                let center = spec.origin + DVec3::new(0.6 * spec.width, -0.5 * spec.height, 0.0);
+                p.collisions.colliders = vec![
+                    Collider::Sphere {
+                        center,
+                        radius: 0.1,
+                    },
+                    Collider::flag_pole(&spec, p.collisions.thickness),
+                ];
+            });
+            // The colliders act: without them the flag ends elsewhere.
+            let alone = bits_per_frame(sim.clone(), Path::Plain, 1, 20);
+            let free = bits_per_frame(flag(32, 23, parallel, |_| ()), Path::Plain, 1, 20);
+            assert!(alone.last() != free.last(), "the colliders touch the flag");
+            assert_fast_gives_the_plain_bits(sim, threads, 20, "colliders");
+        }
+    }
 }
