@@ -275,7 +275,7 @@ pub struct PoleSection {
 
 impl Default for PoleSection {
     /// Off: in the default wind the flag never reaches its pole (60 s checked), so the contact would
-    /// cost 1.4× the frame for nothing (docs/perf/collisions.md).
+    /// cost 1.3× the frame for nothing (docs/perf/collisions.md).
     fn default() -> Self {
         PoleSection { collider: false }
     }
