@@ -58,9 +58,10 @@ pub(crate) struct Contacts {
     /// The particles and the edges' midpoints binned by cell, rebuilt with the lists.
     grid: CellGrid,
     edge_grid: CellGrid,
-    /// Scratch: the edges' midpoints (m), and each edge's particles, half-length and box in
-    /// `edge_grid`'s order.
+    /// Scratch: the edges' midpoints and half-lengths (m), and each edge's particles, midpoint,
+    /// half-length and box in `edge_grid`'s order.
     midpoints: Vec<DVec3>,
+    half_lengths: Vec<f64>,
     binned_edges: Vec<BinnedEdge>,
     /// The colliders' boxes and the free particles inside one (`list_near_colliders`).
     collider_boxes: Vec<(DVec3, DVec3)>,
@@ -314,6 +315,7 @@ impl Contacts {
             edge_edge,
             edge_grid,
             midpoints,
+            half_lengths,
             binned_edges,
             now,
             ..
@@ -324,10 +326,13 @@ impl Contacts {
                 .iter()
                 .map(|&[a, b]| (now[a as usize] + now[b as usize]) / 2.0),
         );
-        let longest = edges
-            .iter()
-            .map(|&[a, b]| now[a as usize].distance(now[b as usize]))
-            .fold(0.0, f64::max);
+        half_lengths.clear();
+        half_lengths.extend(
+            edges
+                .iter()
+                .map(|&[a, b]| now[a as usize].distance(now[b as usize]) / 2.0),
+        );
+        let longest = 2.0 * half_lengths.iter().copied().fold(0.0, f64::max);
         edge_grid.build(midpoints, reach + longest);
         binned_edges.clear();
         binned_edges.extend(edge_grid.entries.iter().map(|&e| {
@@ -337,7 +342,7 @@ impl Contacts {
                 edge: e,
                 particles: [a, b],
                 midpoint: midpoints[e as usize],
-                half_length: x.distance(y) / 2.0,
+                half_length: half_lengths[e as usize],
                 low: x.min(y),
                 high: x.max(y),
             }
@@ -668,13 +673,7 @@ impl CellGrid {
         };
         let most = 4.0 * points.len() as f64 + 64.0;
         let mut side = if cell > 0.0 { cell } else { f64::INFINITY };
-        let cells_over = |low: DVec3, high: DVec3, side: f64| {
-            let dims = (high / side).floor() - (low / side).floor() + DVec3::ONE;
-            dims.x * dims.y * dims.z
-        };
-        if cells_over(low, high, side) > most {
-            (low, high) = middle_box(points, 0.01);
-        }
+        let mut trimmed = false;
         let (origin, dims) = loop {
             let origin = (low / side).floor();
             let dims = (high / side).floor() - origin + DVec3::ONE;
@@ -682,7 +681,13 @@ impl CellGrid {
             if count <= most {
                 break (origin, dims.to_array().map(|d| d as usize));
             }
-            side *= (count / most).cbrt().max(1.5);
+            // Too many: first the middle of the points, then larger cells.
+            if trimmed {
+                side *= (count / most).cbrt().max(1.5);
+            } else {
+                (low, high) = middle_box(points, 0.01);
+                trimmed = true;
+            }
         };
         self.cell = side;
         self.origin = origin;
