@@ -174,6 +174,25 @@ fn options_that_do_not_go_together_are_one_line_usage_errors() {
         1,
         &["--wind-renewal-interval", "NaN"],
     );
+    for thickness in ["-0.001", "0", "NaN"] {
+        assert_one_line_error(
+            &[
+                "bench",
+                "sim",
+                "--contacts",
+                "self",
+                "--thickness",
+                thickness,
+            ],
+            1,
+            &["--thickness", thickness],
+        );
+    }
+    assert_one_line_error(
+        &["bench", "sim", "--thickness", "0.001"],
+        1,
+        &["--thickness", "--contacts"],
+    );
     assert_one_line_error(
         &["bench", "sim", "--spring-damping", "maybe"],
         2,

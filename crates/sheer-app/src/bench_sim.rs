@@ -50,6 +50,10 @@ pub struct BenchSimArgs {
     /// and self-collision, as `assets/wrap.scene.toml`); position-based methods only.
     #[arg(long, value_enum, default_value_t = ContactCase::None)]
     pub contacts: ContactCase,
+    /// The cloth's thickness with `--contacts pole|self`, m (`collisions.thickness`). Default: the
+    /// default flag's, 0.004.
+    #[arg(long, allow_negative_numbers = true)]
+    pub thickness: Option<f64>,
     /// Minimum measuring time per case, seconds, in [0, 3600] (at least one frame is always timed).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub seconds: f64,
@@ -83,6 +87,8 @@ pub struct FlagOverrides {
     pub wind_renewal_interval: Option<f64>,
     pub spring_damping: Switch,
     pub contacts: ContactCase,
+    /// `collisions.thickness`, m; `None`: the default flag's.
+    pub thickness: Option<f64>,
 }
 
 /// Longest `--seconds` of the benchmarks: an hour per case, so that a typo does not hang the program.
@@ -171,6 +177,9 @@ pub fn flag_simulation(
     }
     if overrides.spring_damping == Switch::Off {
         params.remove_spring_damping();
+    }
+    if let Some(thickness) = overrides.thickness {
+        params.collisions.thickness = thickness;
     }
     if overrides.contacts != ContactCase::None {
         params
@@ -294,12 +303,25 @@ pub fn run(args: &BenchSimArgs) -> Result<(), CliError> {
             "--wind-renewal-interval must be finite and ≥ 0 s, got {interval}"
         )));
     }
+    if let Some(thickness) = args.thickness {
+        if !(thickness.is_finite() && thickness > 0.0) {
+            return Err(CliError::new(format!(
+                "--thickness must be finite and > 0 m, got {thickness}"
+            )));
+        }
+        if args.contacts == ContactCase::None {
+            return Err(CliError::new(
+                "--thickness needs --contacts pole or self".to_string(),
+            ));
+        }
+    }
     let minimum = Duration::from_secs_f64(args.seconds);
     let overrides = FlagOverrides {
         parallel_min_particles: args.parallel_min_particles,
         wind_renewal_interval: args.wind_renewal_interval,
         spring_damping: args.spring_damping,
         contacts: args.contacts,
+        thickness: args.thickness,
     };
     if args.csv {
         outln!(
