@@ -348,14 +348,12 @@ impl Contacts {
             }
         }));
         let (grid, binned, now) = (&*edge_grid, &binned_edges[..], &now[..]);
-        let [_, rows, columns] = grid.dims;
         *edge_edge = concat_in_order(parallel, grid.cells(), |c, pairs| {
             let own = grid.run(c as u32);
             if own.is_empty() {
                 return;
             }
-            let coordinates = [c / (rows * columns), (c / columns) % rows, c % columns];
-            grid.for_each_forward_neighbour(coordinates, |d| {
+            grid.for_each_forward_neighbour(grid.cell_coordinates_of(c as u32), |d| {
                 let other = grid.run(d);
                 for slot in own.clone() {
                     let this = &binned[slot];
@@ -742,6 +740,12 @@ impl CellGrid {
         ((i * self.dims[1] + j) * self.dims[2] + k) as u32
     }
 
+    /// The coordinates of cell number `c` (the inverse of [`cell_number`](Self::cell_number)).
+    fn cell_coordinates_of(&self, c: u32) -> [usize; 3] {
+        let (c, [_, rows, columns]) = (c as usize, self.dims);
+        [c / (rows * columns), (c / columns) % rows, c % columns]
+    }
+
     /// The entries of cell number `c`, as indices into `entries` and `points`.
     fn run(&self, c: u32) -> std::ops::Range<usize> {
         self.starts[c as usize] as usize..self.starts[c as usize + 1] as usize
@@ -1109,6 +1113,10 @@ mod tests {
             assert!(grid.cells() <= 4 * 500 + 64, "{cell}: {}", grid.cells());
             // The far point does not thin the grid: it keeps its cells.
             assert!(cell < 1e-3 || grid.cell == cell, "{}", grid.cell);
+            assert!(
+                (0..grid.cells() as u32)
+                    .all(|c| grid.cell_number(grid.cell_coordinates_of(c)) == c)
+            );
             let mut nothing = true;
             grid.for_each_in_box(DVec3::splat(f64::NEG_INFINITY), DVec3::ZERO, |_, _| {
                 nothing = false
